@@ -1,0 +1,308 @@
+"""Scenes: what is simulated, independent of how it is solved.
+
+A :class:`Scene` names a mesh with regions and boundaries, the material and pseudo-density of each
+region, where fracture may happen, where the third-medium regulariser acts, the supports and the
+displacement-controlled load. The solver builds only what a scene needs: order-1 displacement
+when no regulariser acts, no phase-field unknowns when no region may break, no contact medium
+when no region has density below one.
+
+Units: mm, N, MPa. A 2D mesh is plane strain with out-of-plane ``thickness`` (mm); forces and
+energies are reported for that thickness.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+import re
+import warnings
+from typing import Mapping, Sequence
+
+import numpy as np
+import ngsolve as ngs
+
+from .materials import Material
+
+__all__ = ["Support", "DisplacementLoad", "Regulariser", "Scene", "ResolutionWarning"]
+
+_DIRECTIONS = {"x": (0, 1.0), "-x": (0, -1.0), "y": (1, 1.0), "-y": (1, -1.0), "z": (2, 1.0), "-z": (2, -1.0)}
+
+
+class ResolutionWarning(UserWarning):
+    """The mesh does not resolve the phase-field length scale where fracture may happen."""
+
+
+@dataclass(frozen=True)
+class Support:
+    """Zero displacement of the chosen components on a named boundary.
+
+    boundary: boundary name, or several joined by "|"; x, y, z: which components are held.
+    """
+
+    boundary: str
+    x: bool = False
+    y: bool = False
+    z: bool = False
+
+    def components(self) -> list[int]:
+        return [i for i, held in enumerate((self.x, self.y, self.z)) if held]
+
+
+@dataclass(frozen=True)
+class DisplacementLoad:
+    """Displacement imposed uniformly on a named boundary in a coordinate direction.
+
+    boundary: boundary name; direction: one of "x", "-x", "y", "-y", "z", "-z" (the load value,
+    mm, is the displacement along this direction, and the recorded force is the reaction in this
+    direction, positive when it resists the imposed motion); hold_tangential: also hold the other
+    components of that boundary at zero (needed for a rigid indenter floating in a soft void, whose
+    tangential motion is otherwise a near-singular mode).
+    """
+
+    boundary: str
+    direction: str = "-y"
+    hold_tangential: bool = False
+
+    def __post_init__(self):
+        if self.direction not in _DIRECTIONS:
+            raise ValueError(f"DisplacementLoad direction = {self.direction!r} is not one of {sorted(_DIRECTIONS)}")
+
+    @property
+    def component(self) -> int:
+        return _DIRECTIONS[self.direction][0]
+
+    @property
+    def sign(self) -> float:
+        return _DIRECTIONS[self.direction][1]
+
+
+@dataclass(frozen=True)
+class Regulariser:
+    """Hessian regularisation of the third medium (Eq. 3) on the named regions.
+
+    regions: region names where it acts (normally the void), joined by "|" or as a list;
+    kbar_r: dimensionless factor (1e-6 in the literature), > 0; length: characteristic length L of
+    the structure, mm, > 0; damping: "none" or "exp" (energy density times exp(-5 J), see
+    :mod:`ngtmc.contact_regularisation`). k_r = kbar_r L^2 K0 with K0 the bulk modulus of the
+    region's base material. It multiplies the void indicator 1 - rho.
+    """
+
+    regions: str | Sequence[str]
+    length: float
+    kbar_r: float = 1e-6
+    damping: str = "none"
+
+    def __post_init__(self):
+        for name, v in (("kbar_r", self.kbar_r), ("length", self.length)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"Regulariser {name} = {v!r} is outside the allowed range: finite and > 0")
+        if self.damping not in ("none", "exp"):
+            raise ValueError(f"Regulariser damping = {self.damping!r} is not one of 'none', 'exp'")
+
+
+def _names(spec) -> list[str]:
+    if spec is None:
+        return []
+    if isinstance(spec, str):
+        return [s for s in spec.split("|") if s]
+    return [s for item in spec for s in _names(item)]
+
+
+@dataclass
+class Scene:
+    """A structure to simulate (see the module docstring).
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+        2D (plane strain) or 3D mesh with named regions and boundaries.
+    materials : mapping region name -> Material
+        Base (fully dense) material of every region of the mesh. A void region has the material it is
+        interpolated from (its stiffness is gamma(rho) times this one).
+    supports : list of Support
+    load : DisplacementLoad
+    density : mapping region name -> rho in [0, 1], or array of one rho per element, optional
+        Pseudo-density (1 solid, 0 void). Regions not named are solid (rho = 1).
+    fracture_regions : region names where the phase field lives (empty: nothing may break)
+    regulariser : Regulariser or None
+    gamma0 : float
+        Void stiffness ratio of Eq. 17, in (0, 1). Only matters where rho < 1.
+    gc_a, gc_b : float
+        Parameters a (> 0) and b (> 0) of the toughness interpolation of Eq. 18.
+    residual_stiffness : float
+        Added to g(alpha), >= 0 (default 1e-6; keep it at least about gamma0).
+    thickness : float
+        Out-of-plane thickness in 2D, mm (> 0). Ignored in 3D.
+    order : int or None
+        Polynomial order of the displacement; None chooses 2 with a regulariser and 1 without.
+    name : str
+        Free label used in messages and reports.
+    """
+
+    mesh: ngs.Mesh
+    materials: Mapping[str, Material]
+    supports: Sequence[Support]
+    load: DisplacementLoad
+    density: Mapping[str, float] | np.ndarray | None = None
+    fracture_regions: str | Sequence[str] = ()
+    regulariser: Regulariser | None = None
+    gamma0: float = 1e-6
+    gc_a: float = 10.0
+    gc_b: float = 100.0
+    residual_stiffness: float = 1e-6
+    thickness: float = 1.0
+    order: int | None = None
+    name: str = "scene"
+    _checked: bool = field(default=False, repr=False)
+
+    # ---------------------------------------------------------------- derived properties
+    @property
+    def dim(self) -> int:
+        return self.mesh.dim
+
+    @property
+    def fracture_region_names(self) -> list[str]:
+        return _names(self.fracture_regions)
+
+    @property
+    def has_fracture(self) -> bool:
+        return len(self.fracture_region_names) > 0
+
+    @property
+    def displacement_order(self) -> int:
+        if self.order is not None:
+            return int(self.order)
+        return 2 if self.regulariser is not None else 1
+
+    def element_density(self) -> np.ndarray:
+        """Pseudo-density per element (array of length mesh.ne), dimensionless."""
+        ne = self.mesh.ne
+        if self.density is None:
+            return np.ones(ne)
+        if isinstance(self.density, Mapping):
+            rho = np.ones(ne)
+            mats = self.mesh.GetMaterials()
+            idx = np.array([el.index for el in self.mesh.Elements(ngs.VOL)])
+            for region, value in self.density.items():
+                ids = [i for i, m in enumerate(mats) if re.fullmatch(region, m)]
+                rho[np.isin(idx, ids)] = float(value)
+            return rho
+        rho = np.asarray(self.density, dtype=float).ravel()
+        if rho.shape != (ne,):
+            raise ValueError(f"density array has {rho.size} entries; the mesh has {ne} elements (one rho per element expected)")
+        return rho
+
+    @property
+    def has_void(self) -> bool:
+        return bool(np.any(self.element_density() < 1.0))
+
+    # ---------------------------------------------------------------- validation
+    def check(self) -> "Scene":
+        """Validate every input; raise ValueError naming the parameter and the allowed range.
+
+        Warns (:class:`ResolutionWarning`) when the smallest element in a fracture region is larger
+        than l0/2. Returns the scene."""
+        mesh = self.mesh
+        if not isinstance(mesh, ngs.Mesh):
+            raise TypeError(f"Scene.mesh must be an ngsolve.Mesh, got {type(mesh).__name__}")
+        if mesh.dim not in (2, 3):
+            raise ValueError(f"mesh dimension {mesh.dim} is not supported (2 or 3)")
+        regions = set(mesh.GetMaterials())
+        boundaries = set(mesh.GetBoundaries())
+
+        def need_region(name, what):
+            if not any(re.fullmatch(name, r) for r in regions):
+                raise ValueError(f"{what}: unknown region {name!r}; the mesh has regions {sorted(regions)}")
+
+        def need_boundary(name, what):
+            if not any(re.fullmatch(name, b) for b in boundaries):
+                raise ValueError(f"{what}: unknown boundary {name!r}; the mesh has boundaries {sorted(boundaries)}")
+
+        if not self.materials:
+            raise ValueError("Scene.materials is empty: give a Material for every region")
+        for r in self.materials:
+            need_region(r, "Scene.materials")
+            if not isinstance(self.materials[r], Material):
+                raise TypeError(f"Scene.materials[{r!r}] must be a Material")
+        missing = [r for r in regions if not any(re.fullmatch(k, r) for k in self.materials)]
+        if missing:
+            raise ValueError(f"Scene.materials: regions {sorted(missing)} have no material")
+        if isinstance(self.density, Mapping):
+            for r, v in self.density.items():
+                need_region(r, "Scene.density")
+        rho = self.element_density()
+        if not np.all(np.isfinite(rho)) or rho.min() < 0.0 or rho.max() > 1.0:
+            raise ValueError(f"Scene.density: rho must lie in [0, 1]; got values in [{rho.min():g}, {rho.max():g}]")
+        for r in self.fracture_region_names:
+            need_region(r, "Scene.fracture_regions")
+        if self.regulariser is not None:
+            for r in _names(self.regulariser.regions):
+                need_region(r, "Scene.regulariser.regions")
+            if self.displacement_order < 2:
+                raise ValueError(
+                    f"Scene.order = {self.order}: the Hessian regulariser needs displacement order >= 2 "
+                    "(it is identically zero on linear elements); use order=2 or None")
+        if self.displacement_order < 1 or self.displacement_order > 4:
+            raise ValueError(f"Scene.order = {self.order} is outside the allowed range 1..4")
+        if not self.supports:
+            raise ValueError("Scene.supports is empty: a displacement-controlled scene needs supports")
+        for s in self.supports:
+            need_boundary(s.boundary, "Support")
+            if not s.components():
+                raise ValueError(f"Support on {s.boundary!r} holds no component: set x, y and/or z to True")
+            if mesh.dim == 2 and s.z:
+                raise ValueError(f"Support on {s.boundary!r} holds z, but the mesh is 2D")
+        if not isinstance(self.load, DisplacementLoad):
+            raise TypeError("Scene.load must be a DisplacementLoad")
+        need_boundary(self.load.boundary, "DisplacementLoad")
+        if self.load.component >= mesh.dim:
+            raise ValueError(f"DisplacementLoad direction {self.load.direction!r} does not exist in {mesh.dim}D")
+        if not (0.0 < float(self.gamma0) < 1.0):
+            raise ValueError(f"Scene.gamma0 = {self.gamma0!r} is outside the allowed range (0, 1)")
+        for name in ("gc_a", "gc_b", "thickness"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"Scene.{name} = {v!r} is outside the allowed range: finite and > 0")
+        if not (math.isfinite(self.residual_stiffness) and 0.0 <= self.residual_stiffness < 1.0):
+            raise ValueError(f"Scene.residual_stiffness = {self.residual_stiffness!r} is outside the allowed range [0, 1)")
+        if self.has_fracture:
+            self._check_resolution()
+        self._checked = True
+        return self
+
+    def material_of(self, region: str) -> Material:
+        for k, m in self.materials.items():
+            if re.fullmatch(k, region):
+                return m
+        raise KeyError(region)
+
+    def element_sizes(self) -> np.ndarray:
+        """Longest edge of every element, mm (array of length mesh.ne)."""
+        ng = self.mesh.ngmesh
+        pts = np.asarray(ng.Coordinates())
+        if self.mesh.dim == 2:
+            nodes = ng.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+        else:
+            nodes = ng.Elements3D().NumPy()["nodes"][:, :4].astype(int) - 1
+        h = np.zeros(len(nodes))
+        k = nodes.shape[1]
+        for i in range(k):
+            for j in range(i + 1, k):
+                h = np.maximum(h, np.linalg.norm(pts[nodes[:, i]] - pts[nodes[:, j]], axis=1))
+        return h
+
+    def _check_resolution(self):
+        mats = self.mesh.GetMaterials()
+        idx = np.array([el.index for el in self.mesh.Elements(ngs.VOL)])
+        h = self.element_sizes()
+        for r in self.fracture_region_names:
+            ids = [i for i, m in enumerate(mats) if re.fullmatch(r, m)]
+            sel = np.isin(idx, ids)
+            if not sel.any():
+                continue
+            h_min = float(h[sel].min())
+            l0 = min(self.material_of(m).l0 for m in mats if re.fullmatch(r, m))
+            if h_min > l0 / 2:
+                warnings.warn(
+                    f"fracture region {r!r}: smallest element {h_min:.4g} mm is larger than l0/2 = {l0 / 2:.4g} mm; "
+                    "the phase field is not resolved (refine to h <= l0/2, ideally l0/4, along the crack path)",
+                    ResolutionWarning, stacklevel=3)

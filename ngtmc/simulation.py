@@ -1,0 +1,322 @@
+"""From a scene and a load schedule to a recorded history: the load-stepping loop.
+
+    sim = Simulation(scene, Schedule([0, 0.15]), AdaptiveStepControl(du_max=5e-4, k_u=1000))
+    result = sim.run()
+    result.history          # pandas DataFrame, one row per accepted step
+    result.units            # column -> unit
+
+Each accepted step runs the scheme of :mod:`ngtmc.solver` (alpha from H_{n-1}, Newton for u,
+history update). ``staggered="single"`` is the paper's single pass per step (damage lags one step);
+``staggered="converged"`` repeats the alpha-u-H pass at the same load until alpha changes by less
+than ``staggered_tol``, which allows larger steps for the same accuracy.
+
+A step that fails (Newton does not converge) is retried with half the increment; a run that fails
+at the minimum increment raises :class:`StepFailure`, which carries the history recorded so far.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+import sys
+import time
+from typing import Callable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .scene import Scene
+from .solver import NewtonOptions, Solver
+from .stepping import AdaptiveStepControl, Schedule
+
+__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "simulate"]
+
+#: Units of the history columns (force and energies are for the scene thickness in 2D).
+HISTORY_UNITS = {
+    "step": "-",
+    "load": "mm",
+    "force": "N",
+    "fracture_energy": "N mm",
+    "dissipated_energy": "N mm",
+    "elastic_energy": "N mm",
+    "regularisation_energy": "N mm",
+    "max_alpha": "-",
+    "min_J": "-",
+    "newton_iterations": "-",
+    "staggered_iterations": "-",
+    "cutbacks": "-",
+    "alpha_projected": "-",
+    "step_size": "mm",
+    "wall_time": "s",
+    "solve_time": "s",
+    "assembly_time": "s",
+}
+
+
+class StepFailure(RuntimeError):
+    """A load step failed at the minimum increment. ``history`` holds every accepted step so far,
+    ``state`` the solver state of the last accepted step."""
+
+    def __init__(self, message: str, history: pd.DataFrame, state: dict | None = None):
+        super().__init__(message)
+        self.history = history
+        self.state = state
+
+
+@dataclass
+class SimulationResult:
+    """Outcome of :meth:`Simulation.run`: the history (DataFrame), its units, and the solver in its
+    final state (fields ``u``, ``alpha``, ``rho`` for plotting or post-processing)."""
+
+    history: pd.DataFrame
+    units: dict
+    solver: Solver
+    wall_time: float
+
+    @property
+    def peak_force(self) -> float:
+        """Largest recorded force, N."""
+        return float(self.history["force"].max())
+
+    @property
+    def peak_load(self) -> float:
+        """Applied displacement at the largest force, mm."""
+        return float(self.history["load"].iloc[int(self.history["force"].to_numpy().argmax())])
+
+
+class Simulation:
+    """Load-stepping run of a scene (see the module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    schedule : Schedule or float
+        Load schedule (mm); a number means monotonic loading from 0 to that value.
+    control : AdaptiveStepControl, optional
+        Step-size rule; default constant steps of 1/20 of the first segment.
+    staggered : "single" or "converged"
+    staggered_tol : float
+        Largest change of alpha between two passes for "converged", dimensionless.
+    max_staggered : int
+        Pass limit for "converged" (the step counts as failed beyond it).
+    newton : NewtonOptions, optional
+    progress : bool or callable
+        True prints a progress line to stderr about every 5 s; a callable receives each row dict.
+    max_steps : int
+        Safety limit on accepted steps.
+    """
+
+    def __init__(self, scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
+                 staggered: str = "single", staggered_tol: float = 1e-3, max_staggered: int = 30,
+                 newton: NewtonOptions | None = None, progress: bool | Callable = False,
+                 max_steps: int = 100000, compile: bool = True):
+        if not isinstance(schedule, Schedule):
+            schedule = Schedule.monotonic(float(schedule))
+        if control is None:
+            control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
+        if staggered not in ("single", "converged"):
+            raise ValueError(f"staggered = {staggered!r} is not one of 'single', 'converged'")
+        if not (staggered_tol > 0):
+            raise ValueError(f"staggered_tol = {staggered_tol!r} must be > 0")
+        self.scene = scene
+        self.schedule = schedule
+        self.control = control
+        self.staggered = staggered
+        self.staggered_tol = float(staggered_tol)
+        self.max_staggered = int(max_staggered)
+        self.progress = progress
+        self.max_steps = int(max_steps)
+        self.solver = Solver(scene, newton=newton, compile=compile)
+        self.t = 0.0
+        self.step = 0
+        self.rows: list[dict] = []
+        self.last_delta_wf = 0.0
+        self._wf_prev = 0.0
+        self._elapsed_before = 0.0
+        self._t_start = None
+        self._last_print = 0.0
+        self._record(step_size=0.0, newton_iterations=0, staggered_iterations=0, cutbacks=0,
+                     solve_time=0.0, assembly_time=0.0, projected=0)
+
+    # ------------------------------------------------------------------ bookkeeping
+    def _elapsed(self) -> float:
+        if self._t_start is None:
+            return self._elapsed_before
+        return self._elapsed_before + time.perf_counter() - self._t_start
+
+    def _record(self, **info):
+        s = self.solver
+        en = s.energies()
+        row = {
+            "step": self.step,
+            "load": s.load,
+            "force": s.reaction(),
+            "fracture_energy": en["fracture_energy"],
+            "dissipated_energy": en["dissipated_energy"],
+            "elastic_energy": en["elastic_energy"],
+            "regularisation_energy": en["regularisation_energy"],
+            "max_alpha": s.max_alpha(),
+            "min_J": s.min_J(),
+            "newton_iterations": info["newton_iterations"],
+            "staggered_iterations": info["staggered_iterations"],
+            "cutbacks": info["cutbacks"],
+            "alpha_projected": info["projected"],
+            "step_size": info["step_size"],
+            "wall_time": self._elapsed(),
+            "solve_time": info["solve_time"],
+            "assembly_time": info["assembly_time"],
+        }
+        self.rows.append(row)
+        return row
+
+    @property
+    def history(self) -> pd.DataFrame:
+        """Accepted steps so far as a DataFrame (units in :data:`HISTORY_UNITS`)."""
+        return pd.DataFrame(self.rows, columns=list(HISTORY_UNITS))
+
+    @property
+    def finished(self) -> bool:
+        return self.t >= self.schedule.total_time * (1 - 1e-14)
+
+    # ------------------------------------------------------------------ one step
+    def _attempt(self, t_new: float):
+        """Try the step to pseudo-time t_new. Returns (ok, info dict)."""
+        s = self.solver
+        load = self.schedule.load(t_new)
+        newton_its = 0
+        solve_t = assembly_t = 0.0
+        projected = 0
+        H_trial = s.H_committed
+        passes = 0
+        alpha_prev_pass = None
+        for passes in range(1, (1 if self.staggered == "single" else self.max_staggered) + 1):
+            projected = s.solve_phase_field(H_trial)
+            if s.alpha is not None and alpha_prev_pass is not None:
+                change = float(np.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass)))
+                if change <= self.staggered_tol:
+                    # alpha from the latest H agrees with the one u is in equilibrium with: keep u
+                    s.alpha.vec.FV().NumPy()[:] = alpha_prev_pass
+                    passes -= 1
+                    break
+            res = s.solve_displacement(load)
+            newton_its += res.iterations
+            solve_t += res.solve_time
+            assembly_t += res.assembly_time
+            if not res.converged:
+                return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
+                               "message": res.message, "staggered_iterations": passes, "projected": projected}
+            if self.staggered == "single" or s.alpha is None:
+                break
+            H_trial = s.trial_history()
+            alpha_prev_pass = s.alpha.vec.FV().NumPy().copy()
+        else:
+            if self.staggered == "converged" and s.alpha is not None:
+                return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
+                               "message": f"staggered passes did not converge in {self.max_staggered}",
+                               "staggered_iterations": passes, "projected": projected}
+        return True, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
+                      "staggered_iterations": max(passes, 1), "projected": projected}
+
+    def advance(self) -> dict:
+        """Take one accepted step (with cut-backs as needed); return its history row.
+
+        Raises StepFailure when the step fails at the minimum increment."""
+        if self._t_start is None:
+            self._t_start = time.perf_counter()
+        s = self.solver
+        ctrl = self.control
+        t_turn = self.schedule.next_turning_time(self.t)
+        du = ctrl.proposal(self.last_delta_wf)
+        saved = s.get_state()
+        cutbacks = 0
+        totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
+        while True:
+            if self.t + du >= t_turn - 1e-12 * max(1.0, t_turn) or t_turn - (self.t + du) < 1e-3 * ctrl.du_min:
+                t_new = t_turn
+            else:
+                t_new = self.t + du
+            ok, info = self._attempt(t_new)
+            for k in totals:
+                totals[k] += info[k]
+            if ok:
+                break
+            s.set_state(saved)
+            cutbacks += 1
+            smaller = ctrl.failed(t_new - self.t)
+            if smaller is None:
+                msg = (f"step from load {self.schedule.load(self.t):.6g} mm failed at the minimum increment "
+                       f"du_min = {ctrl.du_min:g} mm ({info.get('message', '')}); {len(self.rows)} accepted steps are in "
+                       f"the history carried by this exception")
+                raise StepFailure(msg, self.history, saved)
+            du = smaller
+        step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new > self.t else 0.0
+        s.update_history()
+        self.t = t_new
+        self.step += 1
+        ctrl.accepted()
+        row = self._record(step_size=step_size, staggered_iterations=info["staggered_iterations"], cutbacks=cutbacks,
+                           projected=info["projected"], **totals)
+        wf = s.fracture_energy_per_thickness()
+        self.last_delta_wf = wf - self._wf_prev
+        self._wf_prev = wf
+        self._report_progress(row)
+        return row
+
+    def _report_progress(self, row):
+        if not self.progress:
+            return
+        if callable(self.progress):
+            self.progress(row)
+            return
+        now = time.perf_counter()
+        if now - self._last_print < 5.0 and not self.finished:
+            return
+        self._last_print = now
+        frac = self.t / self.schedule.total_time
+        el = self._elapsed()
+        eta = f", about {el * (1 - frac) / frac:.0f} s left at this pace" if 0.02 < frac < 1 else ""
+        print(f"[ngtmc] step {row['step']:5d}  load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  "
+              f"force {row['force']:.5g} N  max alpha {row['max_alpha']:.3f}  Newton {row['newton_iterations']}"
+              f"  cut-backs {row['cutbacks']}  {100 * frac:5.1f} %  {el:.0f} s{eta}", file=sys.stderr, flush=True)
+
+    # ------------------------------------------------------------------ whole run
+    def run(self, callbacks: Sequence[Callable[["Simulation", dict], None]] = ()) -> SimulationResult:
+        """Advance to the end of the schedule. ``callbacks`` are called as f(simulation, row) after
+        every accepted step (snapshots, checkpoints). Raises StepFailure (with the history so far)
+        if a step fails at the minimum increment."""
+        while not self.finished:
+            if self.step >= self.max_steps:
+                raise StepFailure(f"max_steps = {self.max_steps} reached at load {self.solver.load:.6g} mm",
+                                  self.history, self.solver.get_state())
+            row = self.advance()
+            for cb in callbacks:
+                cb(self, row)
+        return SimulationResult(self.history, self.units, self.solver, self._elapsed())
+
+    @property
+    def units(self) -> dict:
+        return dict(HISTORY_UNITS)
+
+    # ------------------------------------------------------------------ checkpoints
+    def get_state(self) -> dict:
+        """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows."""
+        return {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
+                "control": self.control.state(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
+                "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows]}
+
+    def set_state(self, st: dict):
+        """Resume from a state of :meth:`get_state`."""
+        self.solver.set_state(st["solver"])
+        self.t = float(st["t"])
+        self.step = int(st["step"])
+        self.control.set_state(st["control"])
+        self.last_delta_wf = float(st["last_delta_wf"])
+        self._wf_prev = float(st["wf_prev"])
+        self._elapsed_before = float(st["elapsed"])
+        self._t_start = None
+        self.rows = [dict(r) for r in st["rows"]]
+
+
+def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None, **options) -> SimulationResult:
+    """Run ``scene`` through ``schedule`` and return the :class:`SimulationResult` (shortcut for
+    ``Simulation(scene, schedule, control, **options).run()``)."""
+    return Simulation(scene, schedule, control, **options).run()

@@ -1,0 +1,470 @@
+"""The discrete system of one scene: fields, energies, Newton solver, phase-field solve, history.
+
+One load step of the paper's scheme (Sect. "Numerical implementation") is, with H_{n-1} fixed:
+
+1. :meth:`Solver.solve_phase_field`: a linear SPD solve for alpha_n from H_{n-1};
+2. :meth:`Solver.solve_displacement`: Newton for u_n with alpha_n fixed (energy line search, a guard
+   against J <= 0 / NaN energy, a descent check with a shifted tangent when the tangent is
+   indefinite, and the Dirichlet increment carried by the Newton increment);
+3. :meth:`Solver.update_history`: H_n = max(H_{n-1}, Psi_plus(u_n)) at the quadrature points.
+
+:mod:`ngtmc.simulation` drives these through a load schedule.
+
+Units: mm, N, MPa. Forces and energies returned by this module are for the scene thickness in 2D.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+import re
+import time
+
+import numpy as np
+import ngsolve as ngs
+from ngsolve.comp import IntegrationRuleSpace
+
+from . import contact_regularisation as creg
+from . import fracture
+from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
+from .scene import Scene, _names
+
+__all__ = ["Solver", "NewtonResult", "NewtonOptions"]
+
+
+@dataclass
+class NewtonOptions:
+    """Options of the displacement Newton solver.
+
+    max_iterations: iterations before the attempt counts as failed (the step is then halved);
+    rtol: residual norm relative to the reaction-force scale; atol: absolute residual norm, N
+    (None: 1e-12 E_max L^(d-1), L the diagonal of the mesh's bounding box); armijo: sufficient
+    decrease constant; max_line_search: halvings of the step length before giving up;
+    linear_solver: "sparsecholesky" (symmetric tangents, fastest) or "umfpack".
+    """
+
+    max_iterations: int = 25
+    rtol: float = 1e-8
+    atol: float | None = None
+    armijo: float = 1e-4
+    max_line_search: int = 12
+    linear_solver: str = "sparsecholesky"
+
+    def __post_init__(self):
+        if self.linear_solver not in ("sparsecholesky", "umfpack", "pardiso"):
+            raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
+        if int(self.max_iterations) < 1:
+            raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
+        if not (0 < self.rtol < 1):
+            raise ValueError(f"rtol = {self.rtol!r} is outside the allowed range (0, 1)")
+
+
+@dataclass
+class NewtonResult:
+    """Outcome of one displacement solve."""
+
+    converged: bool
+    iterations: int
+    residual: float
+    solve_time: float
+    assembly_time: float
+    shifted: int = 0
+    message: str = ""
+
+
+_DEBUG = False
+
+
+def _regex(names):
+    return "|".join(names)
+
+
+class Solver:
+    """Fields and solvers of a :class:`~ngtmc.scene.Scene`.
+
+    Attributes worth knowing: ``u`` (displacement GridFunction, mm), ``alpha`` (phase field
+    GridFunction or None), ``rho`` (pseudo-density, L2 order 0 GridFunction: the design field),
+    ``H`` (history on an IntegrationRuleSpace, MPa), ``load`` (current imposed displacement, mm).
+    """
+
+    def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool = True):
+        scene.check()
+        self.scene = scene
+        self.newton = newton or NewtonOptions()
+        self.mesh = mesh = scene.mesh
+        self.dim = d = mesh.dim
+        self.order = p = scene.displacement_order
+        self._compile = compile
+        self.thickness = scene.thickness if d == 2 else 1.0
+
+        # ------------------------------------------------------------ spaces
+        dirichlet = [[] for _ in range(d)]
+        for s in scene.supports:
+            for c in s.components():
+                dirichlet[c].append(s.boundary)
+        load = scene.load
+        dirichlet[load.component].append(load.boundary)
+        if load.hold_tangential:
+            for c in range(d):
+                if c != load.component:
+                    dirichlet[c].append(load.boundary)
+        kw = {}
+        for c, key in zip(range(d), ("dirichletx", "dirichlety", "dirichletz")):
+            if dirichlet[c]:
+                kw[key] = _regex(dirichlet[c])
+        self.fes_u = ngs.VectorH1(mesh, order=p, **kw)
+        self.u = ngs.GridFunction(self.fes_u, name="displacement")
+        self.free = self.fes_u.FreeDofs()
+        self._free_np = np.array(list(self.free), dtype=bool)
+        self._dir_np = ~self._free_np
+
+        self.rho = ngs.GridFunction(ngs.L2(mesh, order=0), name="density")
+        self.rho.vec.FV().NumPy()[:] = scene.element_density()
+
+        # load indicator: 1 (times the direction sign) in the loaded component on the loaded boundary
+        self.e_load = ngs.GridFunction(self.fes_u)
+        self.e_load.components[load.component].Set(load.sign, definedon=mesh.Boundaries(load.boundary))
+        self._e_np = self.e_load.vec.FV().NumPy().copy()
+        self.load = 0.0
+
+        # ------------------------------------------------------------ material fields
+        regions = mesh.GetMaterials()
+        mat_of = {r: scene.material_of(r) for r in regions}
+        self.K0 = mesh.MaterialCF({r: m.K0 for r, m in mat_of.items()})
+        self.G0 = mesh.MaterialCF({r: m.G0 for r, m in mat_of.items()})
+        self.Gc0 = mesh.MaterialCF({r: m.Gc for r, m in mat_of.items()})
+        self.l0 = mesh.MaterialCF({r: m.l0 for r, m in mat_of.items()})
+        self.gamma0 = ngs.Parameter(scene.gamma0)
+        self.gamma = gamma_interpolation(self.rho, self.gamma0)
+        self.K = self.K0 * self.gamma
+        self.G = self.G0 * self.gamma
+        self.Gc = self.Gc0 * gc_interpolation(self.rho, scene.gc_a, scene.gc_b)
+        self.E_max = max(m.E for m in mat_of.values())
+        self.h = scene.element_sizes()
+        pts = np.asarray(mesh.ngmesh.Coordinates())
+        self.length_scale = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+        if self.newton.atol is None:
+            self.newton.atol = 1e-12 * self.E_max * self.length_scale ** (d - 1)
+
+        frac = scene.fracture_region_names
+        self.fracture_regions = frac
+        self._frac_re = _regex(frac)
+        others = [r for r in set(regions) if not any(re.fullmatch(f, r) for f in frac)]
+        self._other_re = _regex(sorted(others))
+
+        # ------------------------------------------------------------ history and phase field
+        self.irs = IntegrationRuleSpace(mesh, order=p)
+        self.dx_H = ngs.dx(intrules=self.irs.GetIntegrationRules())
+        self.H = ngs.GridFunction(self.irs, name="history")
+        self._scratch_irs = ngs.GridFunction(self.irs)
+        self.H_committed = np.zeros(self.irs.ndof)
+        if frac:
+            self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self._frac_re))
+            self.alpha = ngs.GridFunction(self.fes_a, name="alpha")
+            self.alpha_committed = np.zeros(self.fes_a.ndof)
+            self._build_phase_field()
+        else:
+            self.fes_a = None
+            self.alpha = None
+            self.alpha_committed = None
+
+        # ------------------------------------------------------------ displacement energy
+        self.a_u = self._energy_form(self.fes_u.TrialFunction())
+        self._inv = None
+        self._a_shift = None
+        self._r = self.u.vec.CreateVector()
+        self._du = self.u.vec.CreateVector()
+        self._w = self.u.vec.CreateVector()
+        self._tmp = self.u.vec.CreateVector()
+        self._u0 = self.u.vec.CreateVector()
+
+    # ================================================================= energies
+    def _maybe_compile(self, cf):
+        return cf.Compile() if self._compile else cf
+
+    def energy_terms(self, u):
+        """List of (name, energy density CF, region regex) of the displacement problem for field or trial u.
+
+        Names: "elastic_vol", "elastic_dev" (Psi_bar parts, degraded by g(alpha) in fracture
+        regions) and "regularisation" (Phi_bar). Densities in MPa, integrated over the regions."""
+        F = deformation_gradient(u)
+        terms = []
+        sc = self.scene
+        if self.alpha is not None:
+            g = fracture.degradation(self.alpha, sc.residual_stiffness)
+            terms.append(("elastic_vol", g * psi_vol(F, self.K), self._frac_re))
+            terms.append(("elastic_dev", g * psi_dev(F, self.G), self._frac_re))
+        if self._other_re:
+            terms.append(("elastic_vol", psi_vol(F, self.K), self._other_re))
+            terms.append(("elastic_dev", psi_dev(F, self.G), self._other_re))
+        reg = sc.regulariser
+        if reg is not None:
+            K0_reg = self.mesh.MaterialCF({r: sc.material_of(r).K0 for r in self.mesh.GetMaterials()})
+            k_r = creg.regularisation_stiffness(reg.kbar_r, reg.length, K0_reg)
+            phi = creg.phi_bar(u, k_r, indicator=1 - self.rho, damping=reg.damping)
+            terms.append(("regularisation", phi, _regex(_names(reg.regions))))
+        return terms
+
+    def _energy_form(self, trial, extra=None):
+        a = ngs.BilinearForm(self.fes_u, symmetric=True)
+        for _, density, regions in self.energy_terms(trial):
+            a += ngs.Variation(self._maybe_compile(density) * ngs.dx(definedon=self.mesh.Materials(regions)))
+        if extra is not None:
+            a += ngs.Variation(extra)
+        return a
+
+    def energies(self) -> dict:
+        """Current energies, N mm (for the scene thickness): elastic_energy (int g Psi_bar),
+        regularisation_energy (int Phi_bar), fracture_energy (W_f of Eq. 19) and
+        dissipated_energy (W_f / c_w, the crack surface energy of Eq. 5)."""
+        out = {"elastic_energy": 0.0, "regularisation_energy": 0.0}
+        for name, density, regions in self.energy_terms(self.u):
+            key = "regularisation_energy" if name == "regularisation" else "elastic_energy"
+            out[key] += float(ngs.Integrate(density, self.mesh, definedon=self.mesh.Materials(regions), order=2 * self.order))
+        t = self.thickness
+        out = {k: v * t for k, v in out.items()}
+        wf = self.fracture_energy_per_thickness()
+        out["fracture_energy"] = wf * t
+        out["dissipated_energy"] = wf * t / fracture.C_W
+        return out
+
+    def fracture_energy_per_thickness(self) -> float:
+        """W_f of Eq. 19, N mm per mm of thickness in 2D (N mm in 3D): int Gc (alpha^2/l0 + l0 |grad alpha|^2)."""
+        if self.alpha is None:
+            return 0.0
+        dens = fracture.fracture_energy_density(self.alpha, self.Gc, self.l0)
+        return float(ngs.Integrate(dens, self.mesh, definedon=self.mesh.Materials(self._frac_re), order=2))
+
+    def min_J(self) -> float:
+        """Smallest det F at the history quadrature points, dimensionless."""
+        self._scratch_irs.Interpolate(ngs.Det(deformation_gradient(self.u)))
+        return float(self._scratch_irs.vec.FV().NumPy().min())
+
+    def max_alpha(self) -> float:
+        return float(self.alpha.vec.FV().NumPy().max()) if self.alpha is not None else 0.0
+
+    # ================================================================= reaction
+    def reaction(self) -> float:
+        """Reaction on the loaded boundary in the load direction, N (for the scene thickness).
+
+        Computed as <r(u), e> with r the residual of the displacement equation and e the
+        GridFunction equal to the direction sign on the loaded component of the loaded boundary
+        (correct for any order, unlike summing residual entries). Positive when the structure
+        resists the imposed motion."""
+        self.a_u.Apply(self.u.vec, self._r)
+        return float(ngs.InnerProduct(self._r, self.e_load.vec)) * self.thickness
+
+    # ================================================================= displacement Newton
+    def _factorize(self, a):
+        if a is self.a_u:
+            if self._inv is None:
+                self._inv = a.mat.Inverse(self.free, inverse=self.newton.linear_solver)
+            else:
+                self._inv.Update()
+            return self._inv
+        return a.mat.Inverse(self.free, inverse=self.newton.linear_solver)
+
+    def _energy(self, vec) -> float:
+        try:
+            e = self.a_u.Energy(vec)
+        except Exception:  # pragma: no cover - NGSolve raises on some invalid states
+            return math.nan
+        return e
+
+    def _shift_form(self):
+        if self._a_shift is None:
+            self._mu = ngs.Parameter(0.0)
+            self._u_anchor = ngs.GridFunction(self.fes_u)
+            uT = self.fes_u.TrialFunction()
+            extra = 0.5 * self._mu * ngs.InnerProduct(uT - self._u_anchor, uT - self._u_anchor) * ngs.dx
+            self._a_shift = self._energy_form(uT, extra=extra)
+        return self._a_shift
+
+    def solve_displacement(self, load: float) -> NewtonResult:
+        """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed.
+
+        The Dirichlet increment is carried by the Newton increment (never written into u
+        directly, which would invert boundary elements). Steps are accepted only if the energy
+        is finite (which fails as soon as J <= 0 at one quadrature point); once the boundary
+        values are reached, steps must also decrease the energy (Armijo). If the tangent is not
+        a descent direction (indefinite tangent in a squeezed void), it is shifted by mu M with M
+        the mass matrix, mu raised by tenfold until the direction descends. On failure u is left
+        at the last iterate; the caller restores the state."""
+        opt = self.newton
+        u = self.u.vec
+        r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
+        uN = u.FV().NumPy()
+        target = np.where(self._dir_np, load * self._e_np, 0.0)
+        solve_time = 0.0
+        assembly_time = 0.0
+        shifted = 0
+        r_ref = 0.0
+        res = math.inf
+        for it in range(1, opt.max_iterations + 1):
+            self.a_u.Apply(u, r)
+            rN = r.FV().NumPy()
+            rem = np.where(self._dir_np, target - uN, 0.0)
+            lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
+            res = float(np.linalg.norm(rN[self._free_np]))
+            reac = float(np.linalg.norm(rN[self._dir_np]))
+            if not np.isfinite(res):
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
+            if _DEBUG:
+                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} r_ref {r_ref:.3e} tol {opt.rtol * max(reac, r_ref) + opt.atol:.3e}")
+            if not lifted:
+                if r_ref == 0.0:
+                    r_ref = res
+                if res <= opt.rtol * max(reac, r_ref) + opt.atol:
+                    self.load = load
+                    return NewtonResult(True, it - 1, res, solve_time, assembly_time, shifted)
+            t0 = time.perf_counter()
+            self.a_u.AssembleLinearization(u)
+            assembly_time += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            inv = self._factorize(self.a_u)
+            wN = w.FV().NumPy()
+            wN[:] = rem
+            tmp.data = r + self.a_u.mat * w
+            du.data = inv * tmp
+            duN = du.FV().NumPy()
+            duN[:] = np.where(self._dir_np, rem, -duN)
+            solve_time += time.perf_counter() - t0
+            E0 = self._energy(u)
+            if not math.isfinite(E0):
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
+            slope = float(np.dot(rN, duN))
+            if not lifted and slope >= 0.0:
+                # indefinite tangent: shift it with mu M until the direction descends
+                a_s = self._shift_form()
+                self._u_anchor.vec.data = u
+                mu = 1e-4 * self.E_max / float(np.min(self.h)) ** 2
+                for _ in range(6):
+                    shifted += 1
+                    self._mu.Set(mu)
+                    t0 = time.perf_counter()
+                    a_s.AssembleLinearization(u)
+                    assembly_time += time.perf_counter() - t0
+                    t0 = time.perf_counter()
+                    inv_s = self._factorize(a_s)
+                    du.data = inv_s * r
+                    duN = du.FV().NumPy()
+                    duN[:] = np.where(self._dir_np, 0.0, -duN)
+                    solve_time += time.perf_counter() - t0
+                    slope = float(np.dot(rN, duN))
+                    if slope < 0.0:
+                        break
+                    mu *= 10.0
+                if slope >= 0.0:
+                    return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "no descent direction")
+            # line search: energy (Armijo) while the energy can resolve the predicted decrease;
+            # near convergence |slope| falls below the energy's round-off and the test switches to
+            # a decrease of the residual norm
+            u0.data = u
+            near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
+            s = 1.0
+            accepted = False
+            for _ in range(opt.max_line_search):
+                u.data = u0 + s * du
+                E = self._energy(u)
+                if math.isfinite(E):
+                    if lifted:
+                        accepted = True
+                        break
+                    if E <= E0 + opt.armijo * s * slope:
+                        accepted = True
+                        break
+                    if near_converged:
+                        self.a_u.Apply(u, tmp)
+                        if np.linalg.norm(tmp.FV().NumPy()[self._free_np]) <= (1 - 1e-4 * s) * res:
+                            accepted = True
+                            break
+                s *= 0.5
+            if not accepted:
+                u.data = u0
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "line search failed")
+        # one last residual check after the final update
+        self.a_u.Apply(u, r)
+        rN = r.FV().NumPy()
+        rem = np.where(self._dir_np, target - uN, 0.0)
+        res = float(np.linalg.norm(rN[self._free_np]))
+        reac = float(np.linalg.norm(rN[self._dir_np]))
+        if not np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))) and res <= opt.rtol * max(reac, r_ref) + opt.atol:
+            self.load = load
+            return NewtonResult(True, opt.max_iterations, res, solve_time, assembly_time, shifted)
+        return NewtonResult(False, opt.max_iterations, res, solve_time, assembly_time, shifted,
+                            f"no convergence in {opt.max_iterations} iterations (residual {res:.3e} N)")
+
+    # ================================================================= phase field
+    def _build_phase_field(self):
+        a_t, b_t = self.fes_a.TnT()
+        dxf = ngs.dx(definedon=self.mesh.Materials(self._frac_re))
+        dxHf = ngs.dx(definedon=self.mesh.Materials(self._frac_re), intrules=self.irs.GetIntegrationRules())
+        self.a_alpha = ngs.BilinearForm(self.fes_a, symmetric=True)
+        self.f_alpha = ngs.LinearForm(self.fes_a)
+        bil, lin = fracture.alpha_driving_form(a_t, b_t, self.H, self.Gc, self.l0, dxHf, dxf)
+        self.a_alpha += bil
+        self.f_alpha += lin
+        self._inv_alpha = None
+
+    def solve_phase_field(self, H_values: np.ndarray | None = None) -> int:
+        """Solve the linear phase-field equation for alpha with the history fixed (step 1).
+
+        H_values: history at the quadrature points (MPa), default the committed H_{n-1}. The
+        solution is projected onto [alpha_{n-1}, 1] (irreversibility; and the consistent P1
+        reaction term is not an M-matrix, so unprojected alpha may overshoot 1). Returns the number
+        of projected dofs. Returns 0 when the scene has no phase field."""
+        if self.alpha is None:
+            return 0
+        self.H.vec.FV().NumPy()[:] = self.H_committed if H_values is None else H_values
+        self.a_alpha.Assemble()
+        self.f_alpha.Assemble()
+        if self._inv_alpha is None:
+            self._inv_alpha = self.a_alpha.mat.Inverse(self.fes_a.FreeDofs(), inverse="sparsecholesky")
+        else:
+            self._inv_alpha.Update()
+        self.alpha.vec.data = self._inv_alpha * self.f_alpha.vec
+        a = self.alpha.vec.FV().NumPy()
+        projected = int(np.count_nonzero((a < self.alpha_committed) | (a > 1.0)))
+        a[:] = np.clip(np.maximum(a, self.alpha_committed), 0.0, 1.0)
+        return projected
+
+    def psi_plus_values(self) -> np.ndarray:
+        """Psi_plus(u) (Eq. 6) at the history quadrature points, MPa (a copy)."""
+        F = deformation_gradient(self.u)
+        self._scratch_irs.Interpolate(psi_plus(F, self.K, self.G))
+        return self._scratch_irs.vec.FV().NumPy().copy()
+
+    def trial_history(self) -> np.ndarray:
+        """max(H_{n-1}, Psi_plus(u)) at the quadrature points (Eq. 7), MPa; not committed."""
+        return np.maximum(self.H_committed, self.psi_plus_values())
+
+    def update_history(self):
+        """Commit H_n = max(H_{n-1}, Psi_plus(u_n)) and alpha_n (step 3)."""
+        self.H_committed = self.trial_history()
+        self.H.vec.FV().NumPy()[:] = self.H_committed
+        if self.alpha is not None:
+            self.alpha_committed = self.alpha.vec.FV().NumPy().copy()
+
+    # ================================================================= state
+    def get_state(self) -> dict:
+        """Copy of everything needed to restart from this point (numpy arrays)."""
+        st = {"u": self.u.vec.FV().NumPy().copy(), "H": self.H_committed.copy(), "load": np.array(self.load)}
+        if self.alpha is not None:
+            st["alpha"] = self.alpha.vec.FV().NumPy().copy()
+            st["alpha_committed"] = self.alpha_committed.copy()
+        return st
+
+    def set_state(self, st: dict):
+        """Restore a state returned by :meth:`get_state`."""
+        self.u.vec.FV().NumPy()[:] = st["u"]
+        self.H_committed = np.array(st["H"], dtype=float).copy()
+        self.H.vec.FV().NumPy()[:] = self.H_committed
+        self.load = float(st["load"])
+        if self.alpha is not None:
+            self.alpha.vec.FV().NumPy()[:] = st["alpha"]
+            self.alpha_committed = np.array(st["alpha_committed"], dtype=float).copy()
+
+    @property
+    def ndof(self) -> dict:
+        return {"u": self.fes_u.ndof, "alpha": self.fes_a.ndof if self.fes_a is not None else 0,
+                "history_points": self.irs.ndof}
+

@@ -1,0 +1,143 @@
+"""Load schedules and the adaptive displacement control of Eqs. 19-20.
+
+A :class:`Schedule` is a piecewise-linear history of the imposed displacement (mm) through
+turning points, e.g. ``Schedule([0, 6.3, 6.0, 7.0])`` loads to 6.3 mm, unloads to 6 mm and reloads
+to 7 mm. It is parametrised by a pseudo-time t, the accumulated |change of load| (mm), so that a
+step size is a load increment on every segment and every turning point is a value of t that the
+stepping lands on exactly.
+
+:class:`AdaptiveStepControl` chooses the next increment
+
+    du = s * du_max * exp(-k_u (W_f^i - W_f^{i-1}))                      (Eq. 20)
+
+with W_f of Eq. 19 per unit thickness (N mm / mm = N), k_u in 1/N, a floor du_min, and a scale s
+that halves on a failed step (down to du_min) and doubles back towards 1 after ``n_s`` successful
+steps in a row.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["Schedule", "AdaptiveStepControl"]
+
+
+class Schedule:
+    """Piecewise-linear imposed displacement through turning points (mm), starting at 0.
+
+    >>> Schedule([0, 6.3, 6, 7]).total_time  # 6.3 + 0.3 + 1.0
+    7.6
+    """
+
+    def __init__(self, points: Sequence[float]):
+        pts = np.asarray([float(p) for p in points], dtype=float)
+        if pts.ndim != 1 or pts.size < 2:
+            raise ValueError(f"Schedule needs at least two points (start 0 and an end), got {list(points)!r}")
+        if not np.all(np.isfinite(pts)):
+            raise ValueError(f"Schedule points must be finite numbers (mm), got {list(points)!r}")
+        if pts[0] != 0.0:
+            raise ValueError(f"Schedule must start at 0 mm (the unloaded state); it starts at {pts[0]!r}")
+        if np.any(np.diff(pts) == 0.0):
+            raise ValueError(f"Schedule has two equal consecutive points: {list(points)!r}")
+        self.points = pts
+        self.times = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(pts)))])
+
+    @classmethod
+    def monotonic(cls, final: float) -> "Schedule":
+        """Load from 0 to ``final`` mm."""
+        return cls([0.0, final])
+
+    @property
+    def total_time(self) -> float:
+        """Total pseudo-time, mm of accumulated load change."""
+        return float(self.times[-1])
+
+    @property
+    def turning_times(self) -> np.ndarray:
+        return self.times[1:]
+
+    def load(self, t: float) -> float:
+        """Imposed displacement (mm) at pseudo-time t. Exact at every turning point."""
+        i = int(np.searchsorted(self.times, t, side="right") - 1)
+        i = min(max(i, 0), len(self.times) - 2)
+        if t >= self.times[i + 1]:
+            return float(self.points[i + 1])
+        frac = (t - self.times[i]) / (self.times[i + 1] - self.times[i])
+        return float(self.points[i] + frac * (self.points[i + 1] - self.points[i]))
+
+    def next_turning_time(self, t: float, eps: float = 1e-14) -> float:
+        for tt in self.turning_times:
+            if tt > t + eps * max(1.0, abs(tt)):
+                return float(tt)
+        return self.total_time
+
+    def __repr__(self):
+        return f"Schedule({self.points.tolist()})"
+
+
+@dataclass
+class AdaptiveStepControl:
+    """Step-size rule of Eq. 20 with halving on failure and doubling after successes.
+
+    Parameters
+    ----------
+    du_max : float
+        Largest load increment, mm (> 0).
+    k_u : float
+        Sensitivity to the fracture-energy increment, 1/N (W_f per unit thickness); >= 0, 0 gives
+        constant steps du_max.
+    du_min : float
+        Smallest increment, mm (> 0, <= du_max): the floor of Eq. 20, and the size below which a
+        failing step gives up.
+    n_s : int
+        Successful steps after which the scale doubles again (>= 1).
+    """
+
+    du_max: float
+    k_u: float = 0.0
+    du_min: float = 1e-8
+    n_s: int = 5
+    scale: float = field(default=1.0)
+    successes: int = field(default=0)
+
+    def __post_init__(self):
+        if not (math.isfinite(self.du_max) and self.du_max > 0):
+            raise ValueError(f"du_max = {self.du_max!r} mm is outside the allowed range: > 0")
+        if not (math.isfinite(self.k_u) and self.k_u >= 0):
+            raise ValueError(f"k_u = {self.k_u!r} 1/N is outside the allowed range: >= 0")
+        if not (math.isfinite(self.du_min) and 0 < self.du_min <= self.du_max):
+            raise ValueError(f"du_min = {self.du_min!r} mm is outside the allowed range (0, du_max = {self.du_max}]")
+        if int(self.n_s) < 1:
+            raise ValueError(f"n_s = {self.n_s!r} is outside the allowed range: >= 1")
+
+    def proposal(self, delta_wf: float) -> float:
+        """Increment (mm) after an accepted step that raised W_f by ``delta_wf`` (N, per unit thickness)."""
+        du = self.scale * self.du_max * math.exp(-self.k_u * max(float(delta_wf), 0.0))
+        return max(du, self.du_min)
+
+    def accepted(self):
+        """Record a successful step; doubles the scale (up to 1) after n_s successes in a row."""
+        self.successes += 1
+        if self.successes >= self.n_s and self.scale < 1.0:
+            self.scale = min(1.0, 2.0 * self.scale)
+            self.successes = 0
+
+    def failed(self, attempted: float) -> float | None:
+        """Record a failed attempt of size ``attempted`` (mm); return the halved size, or None when it
+        would fall below du_min (the run cannot go on)."""
+        self.successes = 0
+        self.scale = max(self.scale / 2.0, 1e-300)
+        smaller = attempted / 2.0
+        if smaller < self.du_min * (1 - 1e-12):
+            return None
+        return smaller
+
+    def state(self) -> dict:
+        return {"scale": self.scale, "successes": self.successes}
+
+    def set_state(self, state: dict):
+        self.scale = float(state["scale"])
+        self.successes = int(state["successes"])
