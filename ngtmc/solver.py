@@ -129,10 +129,18 @@ class Solver:
         # ------------------------------------------------------------ material fields
         regions = mesh.GetMaterials()
         mat_of = {r: scene.material_of(r) for r in regions}
-        self.K0 = mesh.MaterialCF({r: m.K0 for r, m in mat_of.items()})
-        self.G0 = mesh.MaterialCF({r: m.G0 for r, m in mat_of.items()})
-        self.Gc0 = mesh.MaterialCF({r: m.Gc for r, m in mat_of.items()})
-        self.l0 = mesh.MaterialCF({r: m.l0 for r, m in mat_of.items()})
+        # one ngsolve.Parameter per distinct Material, so that derivatives with respect to E, nu,
+        # Gc and l0 can be formed symbolically (cf.Diff(parameter)) for sensitivities
+        self.material_parameters = {}
+        for m in mat_of.values():
+            if id(m) not in self.material_parameters:
+                self.material_parameters[id(m)] = {k: ngs.Parameter(getattr(m, k)) for k in ("E", "nu", "Gc", "l0")}
+        par = {r: self.material_parameters[id(m)] for r, m in mat_of.items()}
+        self.E0 = mesh.MaterialCF({r: q["E"] for r, q in par.items()})
+        self.K0 = mesh.MaterialCF({r: q["E"] / (3 * (1 - 2 * q["nu"])) for r, q in par.items()})
+        self.G0 = mesh.MaterialCF({r: q["E"] / (2 * (1 + q["nu"])) for r, q in par.items()})
+        self.Gc0 = mesh.MaterialCF({r: q["Gc"] for r, q in par.items()})
+        self.l0 = mesh.MaterialCF({r: q["l0"] for r, q in par.items()})
         self.gamma0 = ngs.Parameter(scene.gamma0)
         self.gamma = gamma_interpolation(self.rho, self.gamma0)
         self.K = self.K0 * self.gamma
@@ -198,8 +206,7 @@ class Solver:
             terms.append(("elastic_dev", psi_dev(F, self.G), self._other_re))
         reg = sc.regulariser
         if reg is not None:
-            K0_reg = self.mesh.MaterialCF({r: sc.material_of(r).K0 for r in self.mesh.GetMaterials()})
-            k_r = creg.regularisation_stiffness(reg.kbar_r, reg.length, K0_reg)
+            k_r = creg.regularisation_stiffness(reg.kbar_r, reg.length, self.K0)
             phi = creg.phi_bar(u, k_r, indicator=1 - self.rho, damping=reg.damping)
             terms.append(("regularisation", phi, _regex(_names(reg.regions))))
         return terms
