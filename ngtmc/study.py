@@ -1,0 +1,156 @@
+"""Named studies: the :class:`Case` dataclass and the study registry.
+
+A named study is one literate module ``studies/<name>.py`` (see ``docs/study-interface.md``) that
+defines ``NAME``, ``TITLE``, ``SUMMARY``, ``PARAMETERS`` (physics: name -> (value, unit,
+description)), ``RESOLUTIONS`` (mesh and step sizes only; at least ``quick``, ``medium``,
+``paper``), ``DEFAULT_RESOLUTION``, ``cases(p)``, ``references(p)`` and ``targets(p)``.
+
+>>> from ngtmc.study import list_studies, load_study
+>>> "three_point_bending" in list_studies()         # doctest: +SKIP
+True
+>>> load_study("three-point-bending").NAME            # dashes or underscores  # doctest: +SKIP
+'three_point_bending'
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import importlib
+import pkgutil
+from types import ModuleType
+from typing import Any, Callable
+
+__all__ = ["Case", "StudyError", "list_studies", "load_study", "normalise_name", "study_parameters"]
+
+
+@dataclass
+class Case:
+    """One load path of a study run.
+
+    name: case name used in ``history.csv`` and ``metadata.json`` (e.g. ``"main"``).
+    label: human-readable label for the report legend.
+    scene: an :class:`ngtmc.Scene`, or a zero-argument callable building it (built lazily by the
+        runner, so listing the cases of a study is cheap).
+    schedule: :class:`ngtmc.Schedule` or a final load in mm.
+    control: :class:`ngtmc.AdaptiveStepControl` or None (the Simulation default).
+    options: keyword arguments for :class:`ngtmc.Simulation` (e.g. ``staggered=True``).
+    snapshot_loads: loads (mm) at which fields are saved; the runner saves the first accepted step
+        at or past each load.
+    parameters: case-specific values (e.g. ``{"gamma0": 1e-5}``) recorded in the metadata.
+    run: optional ``run(case, out_dir) -> pandas.DataFrame`` for a case that is not an ngtmc
+        simulation (e.g. a classical penalty-contact reference); the DataFrame has at least the
+        columns ``load`` and ``force``.
+    """
+
+    name: str
+    label: str = ""
+    scene: Any = None
+    schedule: Any = None
+    control: Any = None
+    options: dict = field(default_factory=dict)
+    snapshot_loads: list = field(default_factory=list)
+    parameters: dict = field(default_factory=dict)
+    run: Callable | None = None
+
+    def __post_init__(self):
+        if not self.label:
+            self.label = self.name
+
+    def build_scene(self):
+        """The scene, building it if ``scene`` is a callable."""
+        from .scene import Scene
+        if self.scene is None:
+            raise ValueError(f"case {self.name!r} has no scene")
+        if isinstance(self.scene, Scene):
+            return self.scene
+        if callable(self.scene):
+            self.scene = self.scene()
+        return self.scene
+
+
+class StudyError(ValueError):
+    """Unknown study name, unknown resolution or unknown override."""
+
+
+def normalise_name(name: str) -> str:
+    """``"three-point-bending"`` -> ``"three_point_bending"``."""
+    return str(name).strip().replace("-", "_").lower()
+
+
+def list_studies() -> list[str]:
+    """Names of the studies in the ``studies`` package (sorted)."""
+    import studies
+    names = []
+    for info in pkgutil.iter_modules(studies.__path__):
+        if info.name.startswith("_"):
+            continue
+        names.append(info.name)
+    return sorted(names)
+
+
+def load_study(name: str) -> ModuleType:
+    """Import ``studies/<name>.py``; ``name`` may use dashes or underscores.
+
+    Raises :class:`StudyError` listing the valid names if there is no such study.
+    """
+    key = normalise_name(name)
+    valid = list_studies()
+    if key not in valid:
+        raise StudyError(f"unknown study {name!r}; valid studies: {', '.join(valid) or '(none)'}")
+    mod = importlib.import_module(f"studies.{key}")
+    missing = [a for a in ("NAME", "PARAMETERS", "RESOLUTIONS", "cases") if not hasattr(mod, a)]
+    if missing:
+        raise StudyError(f"study module studies/{key}.py lacks {', '.join(missing)}")
+    return mod
+
+
+def _coerce(value, like):
+    """Convert a command-line string to the type of the default ``like``."""
+    if not isinstance(value, str) or isinstance(like, str):
+        return value
+    if isinstance(like, bool):
+        v = value.strip().lower()
+        if v in ("1", "true", "yes", "on"):
+            return True
+        if v in ("0", "false", "no", "off"):
+            return False
+        raise StudyError(f"cannot read {value!r} as a boolean")
+    if isinstance(like, int):
+        try:
+            return int(value)
+        except ValueError:
+            return float(value)
+    if isinstance(like, float):
+        return float(value)
+    if isinstance(like, (list, tuple)):
+        parts = [s for s in value.replace(";", ",").split(",") if s.strip()]
+        elem = like[0] if len(like) else 0.0
+        return [_coerce(s.strip(), elem) for s in parts]
+    # unknown default type (e.g. None): try a number, else keep the string
+    for conv in (int, float):
+        try:
+            return conv(value)
+        except ValueError:
+            pass
+    return value
+
+
+def study_parameters(mod: ModuleType, resolution: str | None = None, overrides: dict | None = None) -> tuple[str, dict]:
+    """Resolve the plain parameter dict ``p`` for ``cases(p)`` of a study module.
+
+    ``p`` = PARAMETERS values, then RESOLUTIONS[resolution], then ``overrides``. Override values
+    given as strings (the command line) are converted to the type of the default. Unknown
+    resolutions and unknown override keys raise :class:`StudyError` listing the valid ones.
+    Returns ``(resolution, p)``.
+    """
+    resolutions = mod.RESOLUTIONS
+    res = resolution or getattr(mod, "DEFAULT_RESOLUTION", "quick")
+    if res not in resolutions:
+        raise StudyError(f"unknown resolution {res!r} for study {mod.NAME!r}; valid: {', '.join(resolutions)}")
+    p = {k: v[0] for k, v in mod.PARAMETERS.items()}
+    p.update(resolutions[res])
+    valid = sorted(set(p) | {k for r in resolutions.values() for k in r})
+    for k, v in (overrides or {}).items():
+        if k not in valid:
+            raise StudyError(f"unknown override {k!r} for study {mod.NAME!r}; valid keys: {', '.join(valid)}")
+        p[k] = _coerce(v, p.get(k))
+    return res, p
