@@ -58,13 +58,16 @@ HISTORY_COLUMNS: dict[str, str] = {
 
 #: Largest number of phase-field frames shown per case (frames are skipped evenly beyond this).
 MAX_FRAMES = 8
+#: Largest number of points drawn per history curve (longer curves are thinned, shape kept).
+MAX_POINTS = 400
 #: Number of colour levels used to draw per-triangle fields.
 N_LEVELS = 16
 
 CASE_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
                "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"]
 REF_COLORS = ["#000000", "#555555", "#8c6d31", "#393b79", "#637939"]
-ALPHA_COLORSCALE = "Turbo"
+ALPHA_COLORSCALE = [[0.0, "#e4ecf6"], [0.12, "#b9d3ea"], [0.3, "#fee391"], [0.5, "#fdae61"],
+                    [0.75, "#e6492d"], [1.0, "#7f0000"]]
 RHO_COLORSCALE = [[0.0, "#f7fbff"], [1.0, "#2b5b8a"]]
 
 FONT = ("system-ui, -apple-system, 'Segoe UI', Roboto, 'Helvetica Neue', Arial, "
@@ -202,7 +205,10 @@ def fmt(x, digits: int = 4) -> str:
         return f"{int(v):d}"
     a = abs(v)
     if a >= 1e5 or a < 1e-3:
-        return f"{v:.{digits - 1}e}"
+        mant, _, exp = f"{v:.{digits - 1}e}".partition("e")
+        if "." in mant:
+            mant = mant.rstrip("0").rstrip(".")
+        return f"{mant}e{int(exp)}"
     return f"{v:.{digits}g}"
 
 
@@ -212,6 +218,16 @@ def fmt_u(x, unit: str | None, digits: int = 4) -> str:
     if s == "–" or not unit or unit in ("-", "1"):
         return s
     return f"{s} {unit}"
+
+
+def _pct(x) -> str:
+    """Signed percentage with one decimal ("–" if missing; no "-0.0")."""
+    if not _finite(x):
+        return "–"
+    x = float(x)
+    if abs(x) < 0.05:
+        return "0.0 %"
+    return f"{x:+.1f} %"
 
 
 def fmt_duration(seconds) -> str:
@@ -338,8 +354,44 @@ def _layout(title: str, xtitle: str, ytitle: str, height: int = 430, **kw) -> di
     return lay
 
 
+def decimate(x, y, max_points: int = MAX_POINTS, log_y: bool = False) -> np.ndarray:
+    """Indices of at most about ``max_points`` points keeping the shape of the curve (x, y).
+
+    Points are kept evenly in arc length of the curve normalised by its x and y ranges (log10 of
+    y when ``log_y``), so steep drops and spikes survive while long smooth stretches are thinned;
+    the first, last, largest and smallest points are always kept.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    n = len(x)
+    if n <= max_points:
+        return np.arange(n)
+    yy = np.log10(np.where(y > 0, y, np.nan)) if log_y else y.copy()
+    ok = np.isfinite(x) & np.isfinite(yy)
+    if not ok.any():
+        return np.unique(np.linspace(0, n - 1, max_points).astype(int))
+    xs = np.where(ok, x, np.nan)
+    rx = np.nanmax(xs) - np.nanmin(xs) or 1.0
+    ry = np.nanmax(np.where(ok, yy, np.nan)) - np.nanmin(np.where(ok, yy, np.nan)) or 1.0
+    xn = np.nan_to_num((x - np.nanmin(xs)) / rx)
+    yn = np.nan_to_num((yy - np.nanmin(np.where(ok, yy, np.nan))) / ry)
+    ds = np.hypot(np.diff(xn), np.diff(yn)) + 1.0 / (4 * max_points)  # small floor: index spread
+    s = np.r_[0.0, np.cumsum(ds)]
+    cells = np.floor(s / s[-1] * (max_points - 4)).astype(int)
+    keep = np.r_[True, cells[1:] != cells[:-1]]
+    keep[-1] = True
+    for i in (np.nanargmax(np.where(ok, y, np.nan)), np.nanargmin(np.where(ok, y, np.nan))):
+        keep[int(i)] = True
+    return np.flatnonzero(keep)
+
+
 def _line(x, y, name, color, dash="solid", width=2.0, mode="lines", yaxis=None,
-          legendgroup=None, showlegend=True, sig=6, **kw) -> dict:
+          legendgroup=None, showlegend=True, sig=5, log_y=False, max_points=None,
+          **kw) -> dict:
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    idx = decimate(x, y, max_points or MAX_POINTS, log_y=log_y)
+    x, y = x[idx], y[idx]
     tr = {"type": "scatter", "mode": mode, "x": _rs(x, sig), "y": _rs(y, sig), "name": name,
           "line": {"color": color, "dash": dash, "width": width}, "showlegend": showlegend}
     if "markers" in mode:
@@ -467,7 +519,7 @@ def key_number_rows(meta: dict, history: pd.DataFrame) -> list[dict]:
                 ok = abs(rel) <= float(tol)
             rows.append({**base, "quantity": q.replace("_", " "),
                          "computed": fmt_u(val, unit), "published": fmt_u(pub, unit),
-                         "rel": (f"{rel * 100:+.1f} %" if rel is not None else "–"),
+                         "rel": _pct(rel * 100 if rel is not None else None),
                          "tol": (f"± {float(tol) * 100:.0f} %" if _finite(tol) else "–"),
                          "ok": ok, "source": str(t.get("source") or "")})
     return rows
@@ -563,9 +615,9 @@ def _fig_step_size(history, cases, styles):
             continue
         st = styles[c["name"]]
         data.append(_line(h["load"], h["step_size"], c["label"], st["color"], dash=st["dash"],
-                          mode="lines+markers", width=1.2,
+                          mode="lines+markers", width=1.2, log_y=True,
                           marker={"color": st["color"], "size": 4}))
-    lay = _layout("Step size against applied displacement (paper Fig. 10)",
+    lay = _layout("Step size against displacement (Fig. 10)",
                   "applied displacement u (mm)", "step size Δu (mm)")
     lay["yaxis"].update({"type": "log", "exponentformat": "power"})
     return {"data": data, "layout": lay}
@@ -584,10 +636,10 @@ def _fig_wf_alpha(history, cases, styles):
         if h["max_alpha"].notna().any():
             data.append(_line(h["load"], h["max_alpha"], f"max α – {c['label']}",
                               st["color"], dash="dot", yaxis="y2", legendgroup=c["name"]))
-    lay = _layout("Fracture energy W_f and largest phase field against displacement",
+    lay = _layout("W_f and max α against displacement",
                   "applied displacement u (mm)", "fracture energy W_f (N mm)")
     lay["yaxis2"] = _axis("max α (-)", overlaying="y", side="right", range=[0, 1.05],
-                          showgrid=False, mirror=False)
+                          showgrid=False, mirror=False, tickmode="auto")
     lay["margin"]["r"] = 70
     lay["legend"].update({"x": 0.01, "y": 0.99})
     return {"data": data, "layout": lay}
@@ -605,15 +657,17 @@ def _fig_newton(history, cases, styles):
             data.append(_line(h["step"], h["newton_iterations"], f"Newton iterations – {c['label']}",
                               st["color"], width=1.2, mode="lines", legendgroup=c["name"]))
         if h["cutbacks"].notna().any():
-            data.append({"type": "scatter", "mode": "markers", "x": _rs(h["step"]),
-                         "y": _rs(h["cutbacks"]), "yaxis": "y2", "legendgroup": c["name"],
+            hc = h[h["cutbacks"].fillna(0) > 0]
+            data.append({"type": "scatter", "mode": "markers", "x": _rs(hc["step"]),
+                         "y": _rs(hc["cutbacks"]), "yaxis": "y2", "legendgroup": c["name"],
                          "name": f"cut-backs – {c['label']}",
                          "marker": {"color": st["color"], "symbol": "x", "size": 7}})
     lay = _layout("Newton iterations and cut-backs per accepted step", "accepted step (-)",
                   "Newton iterations per step (-)")
     lay["yaxis"]["rangemode"] = "tozero"
     lay["yaxis2"] = _axis("cut-backs per step (-)", overlaying="y", side="right",
-                          showgrid=False, mirror=False, rangemode="tozero", dtick=1)
+                          showgrid=False, mirror=False, rangemode="tozero", tickmode="linear",
+                          tick0=0, dtick=1)
     lay["margin"]["r"] = 70
     return {"data": data, "layout": lay}
 
@@ -663,14 +717,14 @@ def _fig_interpolation(meta, cases):
         seen.add(g)
         data.append(_line(rho, gamma_of_rho(rho, g), f"γ(ρ), γ0 = {fmt(g, 3)}",
                           CASE_COLORS[k % len(CASE_COLORS)], width=2))
-    lay1 = _layout("Stiffness interpolation γ(ρ) = γ0 + (1 − γ0) ρ (Eq. 17)",
+    lay1 = _layout("γ(ρ) = γ0 + (1 − γ0) ρ (Eq. 17)",
                    "pseudo-density ρ (-)", "γ(ρ) = K/K0 = G/G0 (-)", height=380)
     lay1["yaxis"].update({"type": "log", "exponentformat": "power"})
     gc = gc_ratio_of_rho(rho, a, b)
     data2 = [_line(rho, gc, f"Gc(ρ)/Gc0, a = {fmt(a)}, b = {fmt(b)}", "#d62728", width=2.2),
              _line([0, 1], [a / 2, a / 2], f"void limit a/2 = {fmt(a / 2)}", "#777", dash="dot",
                    width=1.2)]
-    lay2 = _layout("Fracture toughness interpolation Gc(ρ) = (a / (1 + exp(b ρ)) + ρ) Gc0 (Eq. 18)",
+    lay2 = _layout("Gc(ρ)/Gc0 = a / (1 + exp(b ρ)) + ρ (Eq. 18)",
                    "pseudo-density ρ (-)", "Gc(ρ) / Gc0 (-)", height=380)
     return ({"data": data, "layout": lay1}, {"data": data2, "layout": lay2},
             {"a": a, "b": b, "gamma0s": [g for _, g in gamma0s]})
@@ -822,6 +876,7 @@ def _fig_speed_error(entries: list[dict], title: str, size_label: str):
         data.append({"type": "scatter", "mode": "markers+text+lines",
                      "x": _rs([e["wall_time_s"] for e in p]), "y": _rs([e[key] for e in p]),
                      "text": [e["label"] for e in p], "textposition": "top center",
+                     "cliponaxis": False,
                      "name": name, "line": {"color": color, "width": 1, "dash": "dot"},
                      "marker": {"color": color, "size": 10, "symbol": sym},
                      "hovertemplate": "%{text}<br>wall time %{x} s<br>error %{y:.3g} %<extra></extra>"})
@@ -1025,8 +1080,7 @@ def render_report(run_dir, output=None) -> Path:
             dl = None
             if _finite(cn.get("peak_load")) and rp["at"]:
                 dl = (cn["peak_load"] - rp["at"]) / abs(rp["at"]) * 100
-            cn["ref_diffs"].append({"force": f"{d:+.1f} %" if d is not None else "–",
-                                    "load": f"{dl:+.1f} %" if dl is not None else "–"})
+            cn["ref_diffs"].append({"force": _pct(d), "load": _pct(dl)})
 
     ctx = {
         "meta": meta, "study": study, "title": meta.get("title") or study,
