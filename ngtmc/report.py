@@ -385,6 +385,26 @@ def decimate(x, y, max_points: int = MAX_POINTS, log_y: bool = False) -> np.ndar
     return np.flatnonzero(keep)
 
 
+def _legend_below(lay: dict, rows: int = 2) -> dict:
+    """Put the legend under the plot (for half-width plots and plots with a right y axis)."""
+    lay["legend"].update({"orientation": "h", "x": 0.0, "xanchor": "left", "y": -0.2,
+                          "yanchor": "top", "font": {"size": 11}})
+    lay["margin"]["b"] = 80 + 20 * rows
+    lay["height"] = lay.get("height", 430) + 20 * rows
+    return lay
+
+
+def _log_axis(ax: dict, values) -> dict:
+    """Log axis with ticks at whole decades when the data span two decades or more."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v) & (v > 0)]
+    ax.update({"type": "log", "exponentformat": "power"})
+    if v.size and v.max() / v.min() >= 100:
+        decades = math.log10(v.max() / v.min())
+        ax["dtick"] = 1 if decades <= 8 else int(math.ceil(decades / 8))
+    return ax
+
+
 def _line(x, y, name, color, dash="solid", width=2.0, mode="lines", yaxis=None,
           legendgroup=None, showlegend=True, sig=5, log_y=False, max_points=None,
           **kw) -> dict:
@@ -571,6 +591,8 @@ def _fig_force(meta, history, cases, styles, log_y=False):
                 continue
             if log_y:
                 lo, hi = np.abs(lo), np.abs(hi)
+                lo[lo <= 0] = np.nan
+                hi[hi <= 0] = np.nan
             data.append(_line(x[:n], hi[:n], label, "rgba(120,120,120,0.6)", width=0.8,
                               legendgroup=f"ref{k}", showlegend=False, hoverinfo="skip"))
             data.append(_line(x[:n], lo[:n], label, "rgba(120,120,120,0.6)", width=0.8,
@@ -583,6 +605,7 @@ def _fig_force(meta, history, cases, styles, log_y=False):
                 continue
             if log_y:
                 y = np.abs(y)
+                y[y <= 0] = np.nan
             data.append(_line(x[:n], y[:n], label, color, dash="dash", width=2,
                               legendgroup=f"ref{k}"))
     for c in cases:
@@ -592,14 +615,15 @@ def _fig_force(meta, history, cases, styles, log_y=False):
         y = h["force"].to_numpy(dtype=float)
         if log_y:
             y = np.abs(y)
+            y[y <= 0] = np.nan
         st = styles[c["name"]]
         data.append(_line(h["load"], y, c["label"], st["color"], dash=st["dash"], width=2.2,
                           mode="lines+markers" if len(h) < 40 else "lines"))
     if log_y:
         lay = _layout("|Force| against applied displacement (log scale)",
                       "applied displacement u (mm)", f"|force| |F| ({fu})")
-        lay["yaxis"]["type"] = "log"
-        lay["yaxis"]["exponentformat"] = "power"
+        ys = [v for t in data for v in t["y"] if v is not None]
+        _log_axis(lay["yaxis"], ys)
     else:
         lay = _layout("Force against applied displacement", "applied displacement u (mm)",
                       f"force F ({fu})")
@@ -619,7 +643,8 @@ def _fig_step_size(history, cases, styles):
                           marker={"color": st["color"], "size": 4}))
     lay = _layout("Step size against displacement (Fig. 10)",
                   "applied displacement u (mm)", "step size Δu (mm)")
-    lay["yaxis"].update({"type": "log", "exponentformat": "power"})
+    _log_axis(lay["yaxis"], [v for t in data for v in t["y"] if v is not None])
+    _legend_below(lay, rows=max(1, (len(data) + 1) // 2))
     return {"data": data, "layout": lay}
 
 
@@ -641,7 +666,7 @@ def _fig_wf_alpha(history, cases, styles):
     lay["yaxis2"] = _axis("max α (-)", overlaying="y", side="right", range=[0, 1.05],
                           showgrid=False, mirror=False, tickmode="auto")
     lay["margin"]["r"] = 70
-    lay["legend"].update({"x": 0.01, "y": 0.99})
+    _legend_below(lay, rows=max(1, (len(data) + 1) // 2))
     return {"data": data, "layout": lay}
 
 
@@ -669,6 +694,7 @@ def _fig_newton(history, cases, styles):
                           showgrid=False, mirror=False, rangemode="tozero", tickmode="linear",
                           tick0=0, dtick=1)
     lay["margin"]["r"] = 70
+    _legend_below(lay, rows=max(1, (len(data) + 1) // 2))
     return {"data": data, "layout": lay}
 
 
@@ -715,17 +741,25 @@ def _fig_interpolation(meta, cases):
         if g in seen:
             continue
         seen.add(g)
-        data.append(_line(rho, gamma_of_rho(rho, g), f"γ(ρ), γ0 = {fmt(g, 3)}",
-                          CASE_COLORS[k % len(CASE_COLORS)], width=2))
+        color = CASE_COLORS[k % len(CASE_COLORS)]
+        data.append(_line(rho, gamma_of_rho(rho, g), f"γ(ρ), γ0 = {fmt(g, 3)}", color, width=2,
+                          legendgroup=f"g{k}"))
+        data.append({"type": "scatter", "mode": "markers", "x": [0.0], "y": [float(g)],
+                     "marker": {"color": color, "size": 9, "symbol": "circle-open",
+                                "line": {"width": 2}}, "showlegend": False,
+                     "legendgroup": f"g{k}", "name": f"γ(0) = γ0 = {fmt(g, 3)}",
+                     "cliponaxis": False})
     lay1 = _layout("γ(ρ) = γ0 + (1 − γ0) ρ (Eq. 17)",
                    "pseudo-density ρ (-)", "γ(ρ) = K/K0 = G/G0 (-)", height=380)
-    lay1["yaxis"].update({"type": "log", "exponentformat": "power"})
+    _log_axis(lay1["yaxis"], [1e-12, 1] if not gamma0s else [min(g for _, g in gamma0s), 1])
+    _legend_below(lay1, rows=max(1, (len(data) + 1) // 2))
     gc = gc_ratio_of_rho(rho, a, b)
     data2 = [_line(rho, gc, f"Gc(ρ)/Gc0, a = {fmt(a)}, b = {fmt(b)}", "#d62728", width=2.2),
              _line([0, 1], [a / 2, a / 2], f"void limit a/2 = {fmt(a / 2)}", "#777", dash="dot",
                    width=1.2)]
     lay2 = _layout("Gc(ρ)/Gc0 = a / (1 + exp(b ρ)) + ρ (Eq. 18)",
                    "pseudo-density ρ (-)", "Gc(ρ) / Gc0 (-)", height=380)
+    _legend_below(lay2, rows=1)
     return ({"data": data, "layout": lay1}, {"data": data2, "layout": lay2},
             {"a": a, "b": b, "gamma0s": [g for _, g in gamma0s]})
 
@@ -866,7 +900,8 @@ def speed_error_rows(entries: list[dict]) -> list[dict]:
 
 
 def _fig_speed_error(entries: list[dict], title: str, size_label: str):
-    pts = [e for e in entries if _finite(e.get("wall_time_s"))]
+    pts = sorted((e for e in entries if _finite(e.get("wall_time_s"))),
+                 key=lambda e: float(e["wall_time_s"]))
     data = []
     for key, name, color, sym in (("err_finest", "error vs finest", "#1f77b4", "circle"),
                                   ("err_published", "error vs published", "#d62728", "diamond")):
@@ -1052,7 +1087,17 @@ def render_report(run_dir, output=None) -> Path:
             if payload is None:
                 continue
             meshes[c["name"]] = payload
+            same_as = None
+            for prev in mesh_info:
+                pp = meshes[prev["case"]]
+                if (pp["x"] == payload["x"] and pp["y"] == payload["y"]
+                        and pp["t"] == payload["t"] and pp["rho_level"] == payload["rho_level"]):
+                    same_as = prev
+                    break
+            if same_as is not None:
+                same_as["shared_with"].append(c["label"])
             mesh_info.append({
+                "same_as": same_as["label"] if same_as else None, "shared_with": [],
                 "case": c["name"], "label": c["label"], "scale": payload["scale"],
                 "n_frames": len(payload["frames"]), "n_recorded": payload["n_recorded"],
                 "nt": payload["nt"], "nv": payload["nv"], "dim": payload["dim"],
@@ -1064,7 +1109,10 @@ def render_report(run_dir, output=None) -> Path:
         if mi["n_frames"]:
             mesh_plot_ids[mi["snap_id"]] = {"case": mi["case"], "kind": "alpha",
                                             "label": mi["label"], "scale": mi["scale"]}
-        mesh_plot_ids[mi["mesh_id"]] = {"case": mi["case"], "kind": "rho", "label": mi["label"]}
+        if not mi["same_as"]:
+            mesh_plot_ids[mi["mesh_id"]] = {
+                "case": mi["case"], "kind": "rho",
+                "label": ", ".join([mi["label"]] + mi["shared_with"])}
 
     created = meta.get("created")
     versions = meta.get("versions") or {}

@@ -133,8 +133,8 @@ def test_contact_gamma0_has_interpolation(tmp_path):
         assert sid in ids, sid
     figs = _fig_data(page)
     assert "fig-gamma" in figs and "fig-gc" in figs and "fig-force-log" in figs
-    gamma_names = [t["name"] for t in figs["fig-gamma"]["data"]]
-    assert len(gamma_names) == 3  # one per gamma0 (the classical case has none)
+    gamma_lines = [t["name"] for t in figs["fig-gamma"]["data"] if t["mode"] == "lines"]
+    assert len(gamma_lines) == 3  # one per gamma0 (the classical case has none)
     # Gc(rho)/Gc0 -> a/2 = 5 in the void, 1 in the solid
     gc = figs["fig-gc"]["data"][0]
     assert gc["y"][0] == pytest.approx(5.0, rel=1e-3)
