@@ -24,3 +24,8 @@ __all__ = [
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
     "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "__version__",
 ]
+
+from .study import Case, list_studies, load_study  # noqa: E402
+from .runner import run_study  # noqa: E402
+
+__all__ += ["Case", "list_studies", "load_study", "run_study"]

@@ -1,0 +1,135 @@
+"""Command line: ``ngtmc run NAME``, ``ngtmc list``, ``ngtmc report RUN_DIR``.
+
+    ngtmc list
+    ngtmc run three-point-bending --resolution medium --set k_u=50 --set du_max=1e-3
+    ngtmc run three-point-bending --output runs/tpb --resume
+    ngtmc report runs/three_point_bending-quick
+    ngtmc report --index runs
+
+Exit status: 0 on success, 1 when a run failed (its history and metadata are written with status
+"failed"), 2 for usage errors (unknown study, resolution or override), 130 when interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["main", "build_parser", "parse_overrides"]
+
+
+def parse_overrides(items) -> dict:
+    """``["k_u=50", "du_max=1e-3"]`` -> ``{"k_u": "50", "du_max": "1e-3"}`` (values converted later
+    to the type of each default)."""
+    out = {}
+    for item in items or []:
+        if "=" not in item:
+            raise ValueError(f"--set expects key=value, got {item!r}")
+        k, v = item.split("=", 1)
+        k = k.strip()
+        if not k:
+            raise ValueError(f"--set expects key=value, got {item!r}")
+        out[k] = v.strip()
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="ngtmc", description="Third-medium contact and phase-field fracture: "
+                                 "run the paper's validation studies and render their reports.")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run a named study into a run folder")
+    r.add_argument("name", help="study name (dashes or underscores; see `ngtmc list`)")
+    r.add_argument("--resolution", "-r", default=None, help="quick (default), medium, paper, ...")
+    r.add_argument("--output", "-o", default=None, help="run folder (default runs/<study>-<resolution>)")
+    r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a parameter (repeatable), e.g. --set k_u=50 --set gamma0=1e-5")
+    r.add_argument("--resume", action="store_true", help="continue an interrupted or failed run from its checkpoint")
+    r.add_argument("--no-report", action="store_true", help="do not render report.html")
+    r.add_argument("--no-vtk", action="store_true", help="do not write the ParaView series")
+    r.add_argument("--threads", type=int, default=2, help="NGSolve threads (default 2)")
+    r.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
+
+    sub.add_parser("list", help="list the studies with their resolutions")
+
+    rep = sub.add_parser("report", help="render report.html of a run folder, or an index of run folders")
+    rep.add_argument("run_dir", nargs="?", help="run folder")
+    rep.add_argument("--index", metavar="DIR", default=None, help="render an index page of the runs in DIR")
+    return ap
+
+
+def _cmd_list() -> int:
+    from .study import list_studies, load_study
+    for name in list_studies():
+        try:
+            mod = load_study(name)
+            res = ", ".join(mod.RESOLUTIONS)
+            print(f"{name.replace('_', '-'):24s} {getattr(mod, 'TITLE', '')}  [resolutions: {res}; "
+                  f"default {getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}]")
+        except Exception as e:  # a broken study must not hide the others
+            print(f"{name.replace('_', '-'):24s} (cannot be loaded: {type(e).__name__}: {e})")
+    return 0
+
+
+def _cmd_run(args) -> int:
+    from .runner import run_study
+    from .study import StudyError
+    try:
+        overrides = parse_overrides(args.overrides)
+    except ValueError as e:
+        print(f"ngtmc: error: {e}", file=sys.stderr)
+        return 2
+    try:
+        out = run_study(args.name, resolution=args.resolution, output=args.output, overrides=overrides,
+                        report=False if args.no_report else None, resume=args.resume,
+                        progress=not args.quiet, threads=args.threads, vtk=not args.no_vtk)
+    except StudyError as e:
+        print(f"ngtmc: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("ngtmc: interrupted; resume with --resume", file=sys.stderr)
+        return 130
+    except Exception as e:
+        print(f"ngtmc: run failed: {type(e).__name__}: {e}", file=sys.stderr)
+        return 1
+    print(out)
+    return 0
+
+
+def _cmd_report(args) -> int:
+    if not args.run_dir and not args.index:
+        print("ngtmc report: give a run folder, or --index DIR", file=sys.stderr)
+        return 2
+    try:
+        from . import report as _report
+    except ImportError as e:
+        print(f"ngtmc report: the report module ngtmc.report is not available ({e})", file=sys.stderr)
+        return 1
+    fn_name = "render_index" if args.index else "render_report"
+    fn = getattr(_report, fn_name, None)
+    if fn is None:
+        print(f"ngtmc report: ngtmc.report has no {fn_name}() (the report module is incomplete)", file=sys.stderr)
+        return 1
+    target = args.index if args.index else args.run_dir
+    try:
+        path = fn(target)
+    except Exception as e:
+        print(f"ngtmc report: {type(e).__name__}: {e}", file=sys.stderr)
+        return 1
+    if path is not None:
+        print(path)
+    return 0
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.command == "list":
+        return _cmd_list()
+    if args.command == "run":
+        return _cmd_run(args)
+    if args.command == "report":
+        return _cmd_report(args)
+    return 2  # pragma: no cover
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
