@@ -446,7 +446,8 @@ class _Run:
                       for c in self.cases],
             "references": list(mod.references(p)) if hasattr(mod, "references") else [],
             "targets": list(mod.targets(p)) if hasattr(mod, "targets") else [],
-            "results": self.results,
+            "results": self.study_results(),
+            "cpu_time_s": time.process_time(),
             "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else None,
             "host": {"platform": platform.platform(), "cpu_count": os.cpu_count(),
                      "threads": _threads()},
@@ -454,6 +455,17 @@ class _Run:
         if self.error:
             meta["error"] = self.error
         return meta
+
+    def study_results(self) -> dict:
+        """Per-case results, passed through the study's optional ``post_results(p, history, results)``."""
+        results = json.loads(json.dumps(_jsonable(self.results)))
+        hook = getattr(self.mod, "post_results", None)
+        if hook is not None and results:
+            try:
+                results = hook(self.p, self.history_frame(), results) or results
+            except Exception as e:  # a post-processing error must not lose the run's files
+                print(f"[ngtmc] {self.mod.NAME}.post_results failed: {type(e).__name__}: {e}", file=sys.stderr)
+        return results
 
     def write_metadata(self):
         _write_json(self.out / "metadata.json", self.metadata())

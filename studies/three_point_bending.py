@@ -261,3 +261,15 @@ def targets(p: dict) -> list[dict]:
         {"case": "main", "quantity": "peak_load", "value": round(0.046 + gap, 6), "unit": "mm",
          "source": "Ambati et al. 2015, Fig. 22 (0.046 mm) + gap", "tolerance": 0.10},
     ]
+
+
+def post_results(p: dict, history, results: dict) -> dict:
+    """Add per case the force just before contact (largest |force| at loads below the gap), N/mm:
+    the parasitic resistance of the void."""
+    gap = float(p["gap"])
+    for name, r in results.items():
+        h = history[history["case"] == name]
+        pre = h[h["load"] < gap - 1e-12]
+        if len(pre):
+            r["force_before_contact"] = float(pre["force"].abs().max())
+    return results

@@ -1,0 +1,115 @@
+"""studies/three_point_bending.py: the scene, the reference data, and the quick run against the
+published numbers (Ambati et al. 2015, Fig. 22, shifted by the 0.05 mm gap: 42 N/mm at 0.096 mm).
+
+The quick run is the CI run (``@pytest.mark.slow``: minutes). Measured values at every resolution
+are in the study module's ``MEASURED`` dict (and the final report of the change that added them).
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import ngtmc
+from ngtmc.study import load_study, study_parameters
+from studies import three_point_bending as tpb
+
+
+def test_module_interface():
+    assert load_study("three-point-bending") is tpb
+    for attr in ("NAME", "TITLE", "SUMMARY", "PARAMETERS", "RESOLUTIONS", "DEFAULT_RESOLUTION", "cases",
+                 "references", "targets"):
+        assert hasattr(tpb, attr), attr
+    assert {"quick", "medium", "paper"} <= set(tpb.RESOLUTIONS)
+    # Table 1 and the paper's text, in mm, N, MPa
+    P = {k: v[0] for k, v in tpb.PARAMETERS.items()}
+    assert (P["E"], P["nu"], P["Gc"], P["l0"], P["gamma0"]) == (20.8e3, 0.3, 0.54, 0.03, 5e-6)
+    assert (P["gap"], P["k_u"], P["du_min"], P["final_load"]) == (0.05, 1000.0, 1e-8, 0.15)
+    assert tpb.RESOLUTIONS["paper"]["h_band"] == pytest.approx(0.0075)      # l0/4, paper
+    assert tpb.RESOLUTIONS["paper"]["du_max"] == pytest.approx(0.5e-3)      # paper
+    for r in tpb.RESOLUTIONS.values():
+        assert r["h_band"] <= P["l0"] / 2 + 1e-15
+
+
+def test_references_are_shifted_by_the_gap():
+    _, p = study_parameters(tpb, "quick")
+    refs = tpb.references(p)
+    amb = refs[0]
+    i = int(np.argmax(amb["y"]))
+    assert amb["y"][i] == pytest.approx(42.0) and amb["x"][i] == pytest.approx(0.096)
+    assert amb["x_unit"] == "mm" and amb["y_unit"] == "N/mm" and "Ambati" in amb["source"]
+    mie = refs[1]
+    assert max(mie["y"]) == pytest.approx(34.7, abs=0.1)
+    t = {x["quantity"]: x for x in tpb.targets(p)}
+    assert t["peak_force"]["value"] == 42.0 and t["peak_force"]["tolerance"] == 0.15
+    assert t["peak_load"]["value"] == pytest.approx(0.096) and t["peak_load"]["tolerance"] == 0.10
+
+
+def test_scene_geometry():
+    _, p = study_parameters(tpb, "quick", {"h_band": 0.03, "h_void": 0.05, "h_beam": 0.4, "h_indenter": 0.15})
+    case = tpb.cases(p)[0]
+    with pytest.warns(ngtmc.ResolutionWarning):
+        scene = case.build_scene().check()
+    mesh = scene.mesh
+    assert set(mesh.GetMaterials()) == {"beam", "band", "support_zone", "void", "indenter"}
+    assert {"support_left", "support_right", "load"} <= set(mesh.GetBoundaries())
+    pts = np.asarray(mesh.ngmesh.Coordinates())
+    assert pts[:, 0].min() == pytest.approx(0.0) and pts[:, 0].max() == pytest.approx(8.0)
+    # indenter flat top at 2 + gap + R, its lowest point at 2 + gap
+    assert pts[:, 1].max() == pytest.approx(2.0 + 0.05 + 0.5)
+    rho = scene.element_density()
+    assert set(np.unique(rho)) == {0.0, 1.0}
+    assert scene.fracture_region_names == ["beam", "band"]
+    assert scene.regulariser is not None and scene.displacement_order == 2
+    assert scene.load.direction == "-y" and scene.load.hold_tangential
+    # the notch (0.03 wide, 0.4 deep) is cut out of the mesh; the beam is there just beside it
+    for x in (3.99, 4.0, 4.01):
+        for y in (0.05, 0.2, 0.39):
+            assert mesh(x, y).nr == -1, (x, y)
+    assert mesh(4.0 + 0.03, 0.2).nr >= 0 and mesh(4.0, 0.41).nr >= 0
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tpb") / "quick"
+    ngtmc.run_study("three_point_bending", resolution="quick", output=out, report=False, progress=False)
+    meta = json.loads((out / "metadata.json").read_text())
+    hist = pd.read_csv(out / "history.csv")
+    return out, meta, hist
+
+
+@pytest.mark.slow
+def test_quick_run_files_and_contact(quick_run):
+    out, meta, h = quick_run
+    r = meta["results"]["main"]
+    print("\nthree_point_bending quick:", {k: r.get(k) for k in ("peak_force", "peak_load", "steps",
+                                                                   "newton_iterations", "wall_time_s",
+                                                                   "force_before_contact")},
+          meta["mesh"])
+    assert meta["status"] == "completed"
+    assert h["load"].iloc[-1] == pytest.approx(0.15)
+    # about zero force until contact at the gap: the void's resistance is < 2 % of the peak
+    assert r["force_before_contact"] < 0.02 * r["peak_force"]
+    # after contact the force rises; a crack runs (alpha = 1) and the force drops after the peak
+    assert h["max_alpha"].iloc[-1] > 0.99
+    assert h["force"].iloc[-1] < 0.5 * r["peak_force"]
+    assert r["peak_load"] > 0.05
+    z = np.load(out / "snapshots.npz")
+    assert z["main__u"].shape[0] == len(z["main__loads"]) >= len(tpb.SNAPSHOT_LOADS)
+    assert (out / "vtk" / "main.pvd").exists()
+
+
+@pytest.mark.slow
+def test_quick_peak_force(quick_run):
+    _, meta, _ = quick_run
+    peak = meta["results"]["main"]["peak_force"]
+    assert peak == pytest.approx(42.0, rel=0.15), f"peak force {peak:.2f} N/mm"
+
+
+@pytest.mark.slow
+def test_quick_peak_load(quick_run):
+    _, meta, _ = quick_run
+    u = meta["results"]["main"]["peak_load"]
+    assert u == pytest.approx(0.096, rel=0.10), f"displacement at peak {u:.4f} mm"
