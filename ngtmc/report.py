@@ -58,6 +58,8 @@ HISTORY_COLUMNS: dict[str, str] = {
 
 #: Largest number of phase-field frames shown per case (frames are skipped evenly beyond this).
 MAX_FRAMES = 8
+#: Budget of vertex positions in all snapshot frames of a page (frames are skipped beyond it).
+MAX_VERTEX_FRAMES = 150_000
 #: Largest number of points drawn per history curve (longer curves are thinned, shape kept).
 MAX_POINTS = 400
 #: Number of colour levels used to draw per-triangle fields.
@@ -385,6 +387,17 @@ def decimate(x, y, max_points: int = MAX_POINTS, log_y: bool = False) -> np.ndar
     return np.flatnonzero(keep)
 
 
+def _legend_rows(names: list, width_chars: int = 64) -> int:
+    """Rough number of rows a horizontal legend needs for these entry names."""
+    rows, used = 1, 0
+    for n in names:
+        w = len(str(n or "")) + 7
+        if used and used + w > width_chars:
+            rows, used = rows + 1, 0
+        used += w
+    return rows
+
+
 def _legend_below(lay: dict, rows: int = 2) -> dict:
     """Put the legend under the plot (for half-width plots and plots with a right y axis)."""
     lay["legend"].update({"orientation": "h", "x": 0.0, "xanchor": "left", "y": -0.2,
@@ -402,6 +415,8 @@ def _log_axis(ax: dict, values) -> dict:
     if v.size and v.max() / v.min() >= 100:
         decades = math.log10(v.max() / v.min())
         ax["dtick"] = 1 if decades <= 8 else int(math.ceil(decades / 8))
+    elif v.size:
+        ax["dtick"] = "D2"  # less than two decades: label 1, 2, 5 only
     return ax
 
 
@@ -610,6 +625,8 @@ def _fig_force(meta, history, cases, styles, log_y=False):
                               legendgroup=f"ref{k}"))
     for c in cases:
         h = _case_rows(history, c["name"])
+        if log_y and len(h):
+            h = h[h["load"] > 0]  # the initial state carries round-off only
         if not len(h):
             continue
         y = h["force"].to_numpy(dtype=float)
@@ -644,7 +661,7 @@ def _fig_step_size(history, cases, styles):
     lay = _layout("Step size against displacement (Fig. 10)",
                   "applied displacement u (mm)", "step size Δu (mm)")
     _log_axis(lay["yaxis"], [v for t in data for v in t["y"] if v is not None])
-    _legend_below(lay, rows=max(1, (len(data) + 1) // 2))
+    _legend_below(lay, rows=_legend_rows([t["name"] for t in data]))
     return {"data": data, "layout": lay}
 
 
@@ -666,7 +683,11 @@ def _fig_wf_alpha(history, cases, styles):
     lay["yaxis2"] = _axis("max α (-)", overlaying="y", side="right", range=[0, 1.05],
                           showgrid=False, mirror=False, tickmode="auto")
     lay["margin"]["r"] = 70
-    _legend_below(lay, rows=max(1, (len(data) + 1) // 2))
+    _legend_below(lay, rows=_legend_rows([t["name"] for t in data]))
+    if data and all((v or 0) == 0 for t in data for v in t["y"]):
+        lay["annotations"] = [{"text": "no fracture in this run: W_f = 0 and α = 0 throughout",
+                               "xref": "paper", "yref": "paper", "x": 0.5, "y": 0.6,
+                               "showarrow": False, "font": {"size": 13, "color": "#555"}}]
     return {"data": data, "layout": lay}
 
 
@@ -694,7 +715,7 @@ def _fig_newton(history, cases, styles):
                           showgrid=False, mirror=False, rangemode="tozero", tickmode="linear",
                           tick0=0, dtick=1)
     lay["margin"]["r"] = 70
-    _legend_below(lay, rows=max(1, (len(data) + 1) // 2))
+    _legend_below(lay, rows=_legend_rows([t["name"] for t in data], 140))
     return {"data": data, "layout": lay}
 
 
@@ -752,7 +773,7 @@ def _fig_interpolation(meta, cases):
     lay1 = _layout("γ(ρ) = γ0 + (1 − γ0) ρ (Eq. 17)",
                    "pseudo-density ρ (-)", "γ(ρ) = K/K0 = G/G0 (-)", height=380)
     _log_axis(lay1["yaxis"], [1e-12, 1] if not gamma0s else [min(g for _, g in gamma0s), 1])
-    _legend_below(lay1, rows=max(1, (len(data) + 1) // 2))
+    _legend_below(lay1, rows=_legend_rows([t["name"] for t in data if t.get("showlegend", True)]))
     gc = gc_ratio_of_rho(rho, a, b)
     data2 = [_line(rho, gc, f"Gc(ρ)/Gc0, a = {fmt(a)}, b = {fmt(b)}", "#d62728", width=2.2),
              _line([0, 1], [a / 2, a / 2], f"void limit a/2 = {fmt(a / 2)}", "#777", dash="dot",
@@ -801,56 +822,88 @@ def _frame_indices(k: int, max_frames: int = MAX_FRAMES) -> list[int]:
 
 
 def mesh_payload(snap: dict, max_frames: int = MAX_FRAMES) -> dict | None:
-    """Compact, JSON-ready description of one case's snapshots.
+    """Compact, JSON-ready description of one case's snapshots (None if there is no mesh).
 
-    Triangles are stored once; each frame stores the deformed vertex coordinates (mm, rounded
-    to 1e-4 of the domain size, deformation scaled by ``scale``) and one colour level per
-    triangle (phase field averaged over the triangle's vertices, -1 for void triangles).
+    Coordinates are integers: vertex ``i`` of the undeformed mesh is at
+    ``(x0 + q * xi[i], y0 + q * yi[i])`` mm with ``q`` = 1e-4 of the domain size; frame ``f``
+    moves it by ``qu * (dx[i], dy[i])`` mm, the displacement already multiplied by the
+    deformation ``scale``. Triangles are stored once (``t``, flat, 0-based). Each frame lists only
+    the triangles whose phase field (mean of its vertices) is not in the lowest of
+    ``N_LEVELS`` colour levels, as pairs ``nz = [triangle, level, ...]``; void triangles
+    (``rho_level`` < 5, i.e. rho < 0.5) are drawn grey. At most ``max_frames`` frames are kept,
+    evenly spread over the recorded ones, always including the last.
     """
     if not snap or "vertices" not in snap or "triangles" not in snap:
         return None
     V = np.asarray(snap["vertices"], dtype=float)
-    T = np.asarray(snap["triangles"], dtype=np.int64)
-    if V.ndim != 2 or V.shape[0] == 0 or T.ndim != 2 or T.shape[1] != 3 or T.size == 0:
+    T = np.asarray(snap["triangles"])
+    if V.ndim != 2 or V.shape[0] == 0 or V.shape[1] < 2 or T.ndim != 2 or T.shape[1] != 3 \
+            or T.size == 0 or not np.issubdtype(T.dtype, np.integer):
         return None
+    T = T.astype(np.int64)
     if T.max() >= V.shape[0] or T.min() < 0:
         return None
-    nt = T.shape[0]
+    nt, nv = T.shape[0], V.shape[0]
+    x0, y0 = float(V[:, 0].min()), float(V[:, 1].min())
     ext = float(max(np.ptp(V[:, 0]), np.ptp(V[:, 1]))) or 1.0
-    dec = max(0, int(-math.floor(math.log10(ext * 1e-4))))
+    q = float(f"{ext * 1e-4:.3g}")
     rho = np.asarray(snap.get("rho", np.ones(nt)), dtype=float).ravel()
     if rho.size != nt:
         rho = np.ones(nt)
+    rho = np.nan_to_num(rho, nan=1.0)
     void = rho < 0.5
-    rho_level = np.clip(np.round(rho * 10), 0, 10).astype(int)
-    out = {"x": _rd(V[:, 0], dec), "y": _rd(V[:, 1], dec), "t": T.ravel().tolist(),
-           "rho_level": rho_level.tolist(), "nt": int(nt), "nv": int(V.shape[0]),
-           "dim": int(V.shape[1]), "frames": [], "scale": 1.0, "n_recorded": 0,
-           "extent": ext, "n_void": int(void.sum())}
+    out = {"x0": x0, "y0": y0, "q": q,
+           "xi": np.round((V[:, 0] - x0) / q).astype(np.int64),
+           "yi": np.round((V[:, 1] - y0) / q).astype(np.int64),
+           "t": T.ravel(), "rho_level": np.clip(np.round(rho * 10), 0, 10).astype(np.int64),
+           "nt": int(nt), "nv": int(nv), "dim": int(V.shape[1]), "frames": [], "scale": 1.0,
+           "n_recorded": 0, "extent": ext, "n_void": int(void.sum()), "u_max": None}
     loads = np.asarray(snap.get("loads", []), dtype=float).ravel()
     U = snap.get("u")
     A = snap.get("alpha")
     k = len(loads)
-    if U is None or A is None or k == 0:
+    if U is None or k == 0:
         return out
     U = np.asarray(U, dtype=float)
-    A = np.asarray(A, dtype=float)
-    if U.ndim != 3 or U.shape[0] < k or U.shape[1] != V.shape[0] or A.ndim != 2 or A.shape[0] < k:
+    if U.ndim == 2 and k == 1:
+        U = U[None]
+    if U.ndim != 3 or U.shape[0] < k or U.shape[1] != nv or U.shape[2] < 2:
         return out
-    scale = deformation_scale(V, U[:k])
-    out["scale"] = scale
-    out["n_recorded"] = k
-    out["u_max"] = float(np.nanmax(np.linalg.norm(U[:k], axis=-1)))
-    idx = _frame_indices(k, max_frames)
-    for i in idx:
-        X = V[:, :2] + scale * U[i][:, :2]
-        a_tri = np.nan_to_num(A[i][T].mean(axis=1), nan=0.0)
-        lev = np.clip(np.floor(a_tri * N_LEVELS), 0, N_LEVELS - 1).astype(int)
-        lev[void] = -1
-        out["frames"].append({"load": float(f"{loads[i]:.6g}"), "x": _rd(X[:, 0], dec),
-                              "y": _rd(X[:, 1], dec), "lev": lev.tolist(),
-                              "alpha_max": float(f"{np.nanmax(A[i]):.4g}")})
+    if A is not None:
+        A = np.asarray(A, dtype=float)
+        if A.ndim == 1 and k == 1:
+            A = A[None]
+        if A.ndim != 2 or A.shape[0] < k or A.shape[1] != nv:
+            A = None
+    U = np.nan_to_num(U[:k], nan=0.0)
+    scale = deformation_scale(V, U)
+    um = float(np.max(np.linalg.norm(U, axis=-1))) if U.size else 0.0
+    qu = float(f"{max(q, scale * um / 500.0):.3g}")
+    out.update({"scale": scale, "n_recorded": k, "u_max": um, "qu": qu,
+                "has_alpha": A is not None})
+    for i in _frame_indices(k, max_frames):
+        fr = {"load": float(f"{loads[i]:.6g}"),
+              "dx": np.round(scale * U[i][:, 0] / qu).astype(np.int64),
+              "dy": np.round(scale * U[i][:, 1] / qu).astype(np.int64)}
+        if A is not None:
+            a_tri = np.nan_to_num(A[i][T].mean(axis=1), nan=0.0)
+            lev = np.clip(np.floor(a_tri * N_LEVELS), 0, N_LEVELS - 1).astype(np.int64)
+            lev[void] = 0
+            nz = np.flatnonzero(lev)
+            fr["nz"] = np.column_stack([nz, lev[nz]]).ravel()
+            fr["alpha_max"] = float(f"{np.nanmax(A[i]):.4g}")
+        else:
+            fr["nz"] = np.zeros(0, dtype=np.int64)
+            fr["alpha_max"] = None
+        out["frames"].append(fr)
     return out
+
+
+def _same_mesh(a: dict, b: dict) -> bool:
+    return (a["nv"] == b["nv"] and a["nt"] == b["nt"] and a["x0"] == b["x0"]
+            and a["y0"] == b["y0"] and a["q"] == b["q"] and np.array_equal(a["xi"], b["xi"])
+            and np.array_equal(a["yi"], b["yi"]) and np.array_equal(a["t"], b["t"])
+            and np.array_equal(a["rho_level"], b["rho_level"]))
 
 
 def _level_colors(colorscale, n: int) -> list[str]:
@@ -1080,26 +1133,34 @@ def render_report(run_dir, output=None) -> Path:
     meshes = {}
     mesh_info = []
     if snapshots:
+        # frame budget: about MAX_VERTEX_FRAMES vertex positions over all cases
+        n_vert = sum(int(np.shape(sn.get("vertices", ()))[0]) for sn in snapshots.values()
+                     if isinstance(sn, dict) and np.ndim(sn.get("vertices", ())) == 2)
+        frame_cap = max(2, min(MAX_FRAMES, MAX_VERTEX_FRAMES // max(n_vert, 1)))
         for c in cases + [{"name": n, "label": n, "parameters": {}}
                           for n in snapshots if n not in {c["name"] for c in cases}]:
             snap = snapshots.get(c["name"])
-            payload = mesh_payload(snap) if snap else None
+            payload = mesh_payload(snap, frame_cap) if snap else None
             if payload is None:
                 continue
             meshes[c["name"]] = payload
             same_as = None
             for prev in mesh_info:
-                pp = meshes[prev["case"]]
-                if (pp["x"] == payload["x"] and pp["y"] == payload["y"]
-                        and pp["t"] == payload["t"] and pp["rho_level"] == payload["rho_level"]):
+                if _same_mesh(meshes[prev["case"]], payload):
                     same_as = prev
                     break
             if same_as is not None:
                 same_as["shared_with"].append(c["label"])
+                # the base mesh is sent once: this case refers to the first one holding it
+                payload["mesh_of"] = same_as["case"]
+                for key in ("xi", "yi", "t", "rho_level"):
+                    payload.pop(key)
             mesh_info.append({
                 "same_as": same_as["label"] if same_as else None, "shared_with": [],
                 "case": c["name"], "label": c["label"], "scale": payload["scale"],
                 "n_frames": len(payload["frames"]), "n_recorded": payload["n_recorded"],
+                "has_alpha": payload.get("has_alpha", False),
+                "fracture": any((fr.get("alpha_max") or 0) > 0 for fr in payload["frames"]),
                 "nt": payload["nt"], "nv": payload["nv"], "dim": payload["dim"],
                 "u_max": payload.get("u_max"), "n_void": payload["n_void"],
                 "snap_id": f"snap-{len(mesh_info)}", "mesh_id": f"mesh-{len(mesh_info)}",
@@ -1108,11 +1169,14 @@ def render_report(run_dir, output=None) -> Path:
     for mi in mesh_info:
         if mi["n_frames"]:
             mesh_plot_ids[mi["snap_id"]] = {"case": mi["case"], "kind": "alpha",
-                                            "label": mi["label"], "scale": mi["scale"]}
+                                            "label": mi["label"], "scale": fmt(mi["scale"]),
+                                            "fracture": mi["fracture"]}
         if not mi["same_as"]:
+            n_other = len(mi["shared_with"])
             mesh_plot_ids[mi["mesh_id"]] = {
                 "case": mi["case"], "kind": "rho",
-                "label": ", ".join([mi["label"]] + mi["shared_with"])}
+                "label": mi["label"] + (f" (same mesh in {n_other} more case"
+                                        f"{'s' if n_other > 1 else ''})" if n_other else "")}
 
     created = meta.get("created")
     versions = meta.get("versions") or {}

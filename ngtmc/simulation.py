@@ -149,7 +149,7 @@ class Simulation:
         row = {
             "step": self.step,
             "load": s.load,
-            "force": s.reaction(),
+            "force": s.reaction(reuse_residual=self.step > 0),
             "fracture_energy": en["fracture_energy"],
             "dissipated_energy": en["dissipated_energy"],
             "elastic_energy": en["elastic_energy"],

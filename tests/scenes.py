@@ -1,0 +1,71 @@
+"""Small scenes shared by the core tests (seconds each)."""
+from __future__ import annotations
+
+import ngsolve as ngs
+from netgen.occ import Glue, MoveTo, OCCGeometry, Rectangle, X, Y
+
+import ngtmc
+
+
+def bar_mesh(length=1.0, height=0.2, maxh=0.1):
+    """Rectangle [0, length] x [0, height], region "bar", boundaries left/right/bottom/top."""
+    face = Rectangle(length, height).Face()
+    face.faces.name = "bar"
+    face.edges.Min(X).name = "left"
+    face.edges.Max(X).name = "right"
+    face.edges.Min(Y).name = "bottom"
+    face.edges.Max(Y).name = "top"
+    return ngs.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=maxh))
+
+
+def tension_bar(E=1000.0, nu=0.3, Gc=1e-3, l0=1.0, maxh=0.1, fracture=True, **kw):
+    """Homogeneous uniaxial tension (plane strain, free lateral contraction): x held on the left,
+    y held on the bottom, displacement in x imposed on the right."""
+    mesh = bar_mesh(maxh=maxh)
+    return ngtmc.Scene(mesh, {"bar": ngtmc.Material(E, nu, Gc, l0)},
+                       supports=[ngtmc.Support("left", x=True), ngtmc.Support("bottom", y=True)],
+                       load=ngtmc.DisplacementLoad("right", "x"),
+                       fracture_regions="bar" if fracture else (), **kw)
+
+
+def two_blocks(gap=0.05, gamma0=1e-5, maxh=0.05, void_maxh=0.02, kbar_r=1e-6):
+    """Two 1 x 0.4 blocks separated by a void layer of thickness ``gap``; the lower block is
+    clamped at the bottom, the upper one pushed down on its top edge."""
+    W, hb = 1.0, 0.4
+    low = Rectangle(W, hb).Face()
+    low.faces.name = "lower"
+    void = MoveTo(0, hb).Rectangle(W, gap).Face()
+    void.faces.name = "void"
+    void.faces.maxh = void_maxh
+    up = MoveTo(0, hb + gap).Rectangle(W, hb).Face()
+    up.faces.name = "upper"
+    shape = Glue([low, void, up])
+    shape.edges.Min(Y).name = "bottom"
+    shape.edges.Max(Y).name = "top"
+    mesh = ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
+    return ngtmc.Scene(mesh, {".*": ngtmc.Material(1000.0, 0.3)},
+                       supports=[ngtmc.Support("bottom", x=True, y=True)],
+                       load=ngtmc.DisplacementLoad("top", "-y", hold_tangential=True),
+                       density={"void": 0.0}, gamma0=gamma0,
+                       regulariser=ngtmc.Regulariser("void", length=1.0, kbar_r=kbar_r))
+
+
+def notched_plate(maxh=0.08, h_band=0.02, l0=0.04, notch=0.3, **kw):
+    """Single-edge-notched square 1 x 1 in tension: a slit from the left edge to (notch, 0.5),
+    a refined band along y = 0.5; bottom clamped in y (and x at the left corner), top pulled in y."""
+    from netgen.occ import WorkPlane
+    half_w = 0.005
+    plate = Rectangle(1.0, 1.0).Face()
+    slit = MoveTo(-0.01, 0.5 - half_w).Rectangle(notch + 0.01, 2 * half_w).Face()
+    body = plate - slit
+    band = MoveTo(0.0, 0.44).Rectangle(1.0, 0.12).Face()
+    band.faces.maxh = h_band
+    shape = Glue([body - band, body * band])
+    shape.faces.name = "plate"
+    shape.edges.Min(Y).name = "bottom"
+    shape.edges.Max(Y).name = "top"
+    mesh = ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
+    return ngtmc.Scene(mesh, {"plate": ngtmc.Material(210e3, 0.3, 2.7, l0)},
+                       supports=[ngtmc.Support("bottom", x=True, y=True)],
+                       load=ngtmc.DisplacementLoad("top", "y", hold_tangential=True),
+                       fracture_regions="plate", **kw)

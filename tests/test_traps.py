@@ -1,0 +1,106 @@
+"""The NGSolve traps of NGSOLVE_NOTES.md that touch this code, each pinned: the trap itself is shown
+to give a wrong number silently, and ngtmc is shown to avoid it."""
+import dataclasses
+
+import numpy as np
+import ngsolve as ngs
+import pytest
+
+import ngtmc
+from scenes import bar_mesh, tension_bar, two_blocks
+
+
+def test_history_terms_are_integrated_at_the_history_points():
+    """An IntegrationRuleSpace of order p uses a rule of order 2p; a plain dx on the P1 phase field
+    would use order 2 and read the history at the wrong points (an IRS field is 0 elsewhere)."""
+    scene = dataclasses.replace(two_blocks(), fracture_regions="lower")  # order 2: rules differ
+    s = ngtmc.Solver(scene)
+    assert s.order == 2
+    # history = a smooth function sampled at the rule points: the load vector integrates it exactly
+    f = ngs.sin(3 * ngs.x) * ngs.exp(ngs.y) + 2
+    s.H.Interpolate(f)
+    s.f_alpha.Assemble()
+    exact = 2 * ngs.Integrate(f, s.mesh, definedon=s.mesh.Materials("lower"), order=12)
+    assert sum(s.f_alpha.vec.FV().NumPy()) == pytest.approx(exact, rel=1e-9)
+    # the trap: the same form with the default rule silently reads other values
+    beta = s.fes_a.TestFunction()
+    wrong = ngs.LinearForm(2 * s.H * beta * ngs.dx(definedon=s.mesh.Materials("lower")))
+    s.H.vec.FV().NumPy()[:] = np.random.default_rng(0).uniform(0, 1, s.irs.ndof)
+    s.f_alpha.Assemble()
+    wrong.Assemble()
+    ours, theirs = sum(s.f_alpha.vec.FV().NumPy()), sum(wrong.vec.FV().NumPy())
+    assert abs(ours - theirs) > 1e-3 * abs(ours)
+
+
+def test_history_update_is_a_pointwise_maximum_at_the_rule_points():
+    s = ngtmc.Solver(tension_bar())
+    rng = np.random.default_rng(0)
+    s.H_committed = rng.uniform(0, 1e-3, s.irs.ndof)
+    s.u.Set(ngs.CF((0.01 * ngs.x, -0.003 * ngs.y)))
+    plus = s.psi_plus_values()
+    s.update_history()
+    np.testing.assert_array_equal(s.H_committed, np.maximum(plus, s.H_committed))
+
+
+def test_setting_a_vector_on_a_boundary_overwrites_the_other_component():
+    """The trap: gfu.Set(CF((v, 0)), definedon=...) writes 0 into the y dofs there."""
+    mesh = bar_mesh()
+    gfu = ngs.GridFunction(ngs.VectorH1(mesh, order=1))
+    gfu.components[1].Set(0.5)
+    gfu.Set(ngs.CF((0.1, 0)), definedon=mesh.Boundaries("right"))
+    assert gfu.components[1](mesh(1.0, 0.1)) == pytest.approx(0.0)
+
+
+def test_loaded_boundary_keeps_its_free_component():
+    """ngtmc sets one component only: the loaded edge of a bar in tension contracts laterally."""
+    res = ngtmc.simulate(tension_bar(fracture=False), 0.01, ngtmc.AdaptiveStepControl(du_max=0.005))
+    uy = res.solver.u.components[1](res.solver.mesh(1.0, 0.2))
+    assert uy < -1e-4  # plane strain: about -nu/(1-nu) * 0.01 * 0.2
+
+
+def test_writing_boundary_values_into_the_solution_inverts_elements_but_lifting_does_not():
+    mesh = bar_mesh(length=1.0, height=0.4, maxh=0.05)
+    scene = ngtmc.Scene(mesh, {"bar": ngtmc.Material(1000.0, 0.3)}, supports=[ngtmc.Support("bottom", x=True, y=True)],
+                        load=ngtmc.DisplacementLoad("top", "-y", hold_tangential=True))
+    s = ngtmc.Solver(scene)
+    # the trap: write -0.08 on the top edge into u directly (top elements are ~0.05 high)
+    s.u.components[1].Set(-0.08, definedon=mesh.Boundaries("top"))
+    assert np.isnan(s.a_u.Energy(s.u.vec))
+    # ngtmc: the Newton increment carries the boundary value; one step of 20 % compression converges
+    s.u.vec[:] = 0.0
+    res = s.solve_displacement(0.08)
+    assert res.converged
+    assert s.min_J() > 0.5
+    assert np.isfinite(s.a_u.Energy(s.u.vec))
+
+
+def test_energy_is_nan_when_an_element_inverts_and_the_guard_sees_it():
+    s = ngtmc.Solver(tension_bar(fracture=False))
+    s.u.Set(ngs.CF((-1.5 * ngs.x, 0)))  # J = -0.5
+    assert np.isnan(s.a_u.Energy(s.u.vec))
+    assert np.isnan(s._energy(s.u.vec))
+    assert s.min_J() < 0
+
+
+def test_symmetric_solver_agrees_with_general_lu_on_a_contact_step():
+    """sparsecholesky silently accepts a non-symmetric matrix; ngtmc's tangents are symmetric
+    (pure energies, no weak-form-only terms), so it must agree with umfpack."""
+    forces = []
+    for solver in ("sparsecholesky", "umfpack"):
+        sim = ngtmc.Simulation(two_blocks(), 0.045, ngtmc.AdaptiveStepControl(du_max=0.015),
+                               newton=ngtmc.NewtonOptions(linear_solver=solver))
+        forces.append(sim.run().history["force"].to_numpy())
+    np.testing.assert_allclose(forces[0], forces[1], rtol=1e-7, atol=1e-12)
+
+
+def test_tangent_is_symmetric():
+    s = ngtmc.Solver(two_blocks())
+    s.u.Set(ngs.CF((0.01 * ngs.x * ngs.y, -0.02 * ngs.y ** 2)))
+    a = ngs.BilinearForm(s.fes_u, symmetric=False)
+    for _, density, regions in s.energy_terms(s.fes_u.TrialFunction()):
+        a += ngs.Variation(density * ngs.dx(definedon=s.mesh.Materials(regions)))
+    a.AssembleLinearization(s.u.vec)
+    import scipy.sparse as sp
+    rows, cols, vals = a.mat.COO()
+    K = sp.csr_matrix((np.asarray(vals), (np.asarray(rows), np.asarray(cols))))
+    assert abs(K - K.T).max() < 1e-10 * abs(K).max()
