@@ -1285,18 +1285,20 @@ def render_index(reports_dir) -> Path:
             "peak_force": nums.get("peak_force"), "peak": fmt_u(nums.get("peak_force"), fu),
             "peak_load": fmt_u(nums.get("peak_load"), "mm"), "case_label": cases[0]["label"] if cases else first,
             "published": _published_peak(meta, first, fu), "force_unit": fu,
-            "n_cases": len(cases)})
+            "n_cases": len(cases), "steps": nums.get("steps")})
     figs = {}
     studies = []
     for study in sorted(groups):
         runs = sorted(groups[study], key=lambda r: r.get("created_raw", ""), reverse=True)
         comp = None
-        valid = [r for r in runs if "error" not in r and _finite(r.get("peak_force"))]
+        valid = [r for r in runs if "error" not in r and _finite(r.get("peak_force"))
+                 and r.get("status") == "completed"]
         units = {r["force_unit"] for r in valid}
         if len(valid) >= 2 and len(units) == 1:
             entries = [{"label": f"{r['resolution']} ({r['elements']} el.)",
                         "wall_time_s": r["wall_time_s"], "peak_force": r["peak_force"],
-                        "size": r.get("n_elements") or 0, "published": r["published"],
+                        "size": (r.get("n_elements") or 0, r.get("steps") or 0),
+                        "published": r["published"],
                         "name": r["name"], "size_text": f"{r['elements']} elements",
                         "peak": r["peak"], "wall": r["wall"]} for r in valid]
             speed_error_rows(entries)

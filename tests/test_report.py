@@ -282,3 +282,18 @@ def test_report_main(tmp_path, capsys):
     assert report.report_main(["--index", str(reports)]) == 0
     assert (reports / "index.html").is_file()
     assert report.report_main([str(tmp_path / "nothing")]) == 2
+
+
+def test_index_leaves_failed_runs_out_of_the_comparison(tmp_path):
+    reports = tmp_path / "reports"
+    write_run(reports / "a", cases=[("main", "main", 2e-3, {})], n_elements=100, wall_time_s=5.0)
+    write_run(reports / "b", cases=[("main", "main", 1e-3, {})], n_elements=400, wall_time_s=50.0)
+    write_run(reports / "c", cases=[("main", "main", 1e-3, {})], n_elements=9000,
+              wall_time_s=10.0, status="failed", force_scale=0.5)
+    page = report.render_index(reports).read_text(encoding="utf-8")
+    sec = page[page.index('id="speed-error"'):]
+    assert "<td>a</td>" in sec
+    assert "<td>c</td>" not in sec and "<td>c <span" not in sec  # listed, not compared
+    assert '<td>b <span class="pill">finest</span></td>' in sec
+    runs_sec = page[page.index('id="runs"'):page.index('id="speed-error"')]
+    assert "pill-failed" in runs_sec and "c <span" in runs_sec
