@@ -107,7 +107,7 @@ PARAMETERS = {
 # mesh and step sizes only
 RESOLUTIONS = {
     "quick": {"h_band": 0.015, "h_void": 0.03, "h_indenter": 0.08, "h_beam": 0.25, "du_max": 1e-3},
-    "medium": {"h_band": 0.01, "h_void": 0.02, "h_indenter": 0.05, "h_beam": 0.2, "du_max": 0.5e-3},
+    "medium": {"h_band": 0.01, "h_void": 0.025, "h_indenter": 0.06, "h_beam": 0.25, "du_max": 1e-3},
     "paper": {"h_band": 0.0075, "h_void": 0.015, "h_indenter": 0.04, "h_beam": 0.15, "du_max": 0.5e-3},
 }
 DEFAULT_RESOLUTION = "quick"
@@ -264,12 +264,17 @@ def targets(p: dict) -> list[dict]:
 
 
 def post_results(p: dict, history, results: dict) -> dict:
-    """Add per case the force just before contact (largest |force| at loads below the gap), N/mm:
-    the parasitic resistance of the void."""
+    """Add per case the void's resistance before contact, N/mm: ``force_before_contact``, the largest
+    |force| while the load is at most 0.9 gap (the void is then squeezed to a tenth of its
+    thickness), and ``force_at_gap``, the force interpolated at load = gap (the void stiffens as
+    J -> 0, so the force starts to rise just before the gap is closed)."""
     gap = float(p["gap"])
     for name, r in results.items():
         h = history[history["case"] == name]
-        pre = h[h["load"] < gap - 1e-12]
+        pre = h[h["load"] <= 0.9 * gap + 1e-12]
         if len(pre):
             r["force_before_contact"] = float(pre["force"].abs().max())
+        mono = h[h["load"].diff().fillna(1.0) > 0]
+        if len(mono) > 1 and mono["load"].max() >= gap:
+            r["force_at_gap"] = float(np.interp(gap, mono["load"], mono["force"]))
     return results

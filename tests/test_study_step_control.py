@@ -1,5 +1,5 @@
 """studies/step_control.py: six three-point-bending runs (k_u in {0, 50, 1000} x two du_max) and
-their speed-against-error numbers. The quick run (coarse mesh, stops at 0.125 mm) is the CI run."""
+their speed-against-error numbers. The quick run (coarse mesh h_band = l0) is the CI run."""
 from __future__ import annotations
 
 import json
@@ -70,5 +70,5 @@ def test_quick_run(quick_run):
         assert res[f"ku0_du{du}"]["steps"] < res[f"ku50_du{du}"]["steps"] < res[f"ku1000_du{du}"]["steps"]
         assert res[f"ku1000_du{du}"]["min_step_size"] < 0.1 * res[f"ku0_du{du}"]["min_step_size"]
     for name, r in res.items():
-        assert r["final_load"] == pytest.approx(0.125)
+        assert r["final_load"] == pytest.approx(0.15)
         assert np.isfinite(r["peak_force_error"]) and r["peak_load"] > 0.05
