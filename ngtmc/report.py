@@ -60,6 +60,8 @@ HISTORY_COLUMNS: dict[str, str] = {
 MAX_FRAMES = 8
 #: Budget of vertex positions in all snapshot frames of a page (frames are skipped beyond it).
 MAX_VERTEX_FRAMES = 150_000
+#: Element edges are drawn in the density/mesh plot up to this many triangles.
+MAX_EDGE_TRIANGLES = 30_000
 #: Largest number of points drawn per history curve (longer curves are thinned, shape kept).
 MAX_POINTS = 400
 #: Number of colour levels used to draw per-triangle fields.
@@ -422,7 +424,7 @@ def _log_axis(ax: dict, values) -> dict:
 
 def _line(x, y, name, color, dash="solid", width=2.0, mode="lines", yaxis=None,
           legendgroup=None, showlegend=True, sig=5, log_y=False, max_points=None,
-          **kw) -> dict:
+          units: tuple[str, str] | None = None, **kw) -> dict:
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     idx = decimate(x, y, max_points or MAX_POINTS, log_y=log_y)
@@ -431,6 +433,9 @@ def _line(x, y, name, color, dash="solid", width=2.0, mode="lines", yaxis=None,
           "line": {"color": color, "dash": dash, "width": width}, "showlegend": showlegend}
     if "markers" in mode:
         tr["marker"] = {"color": color, "size": 6}
+    if units:
+        ux, uy = (f" {u}" if u and u not in ("-", "1") else "" for u in units)
+        tr["hovertemplate"] = f"%{{x:.5g}}{ux}, %{{y:.5g}}{uy}<extra>%{{fullData.name}}</extra>"
     if yaxis:
         tr["yaxis"] = yaxis
     if legendgroup:
@@ -608,9 +613,9 @@ def _fig_force(meta, history, cases, styles, log_y=False):
                 lo, hi = np.abs(lo), np.abs(hi)
                 lo[lo <= 0] = np.nan
                 hi[hi <= 0] = np.nan
-            data.append(_line(x[:n], hi[:n], label, "rgba(120,120,120,0.6)", width=0.8,
+            data.append(_line(x[:n], hi[:n], label, "rgba(120,120,120,0.6)", width=0.8, units=("mm", fu),
                               legendgroup=f"ref{k}", showlegend=False, hoverinfo="skip"))
-            data.append(_line(x[:n], lo[:n], label, "rgba(120,120,120,0.6)", width=0.8,
+            data.append(_line(x[:n], lo[:n], label, "rgba(120,120,120,0.6)", width=0.8, units=("mm", fu),
                               legendgroup=f"ref{k}", fill="tonexty",
                               fillcolor="rgba(150,150,150,0.30)"))
         else:
@@ -621,7 +626,7 @@ def _fig_force(meta, history, cases, styles, log_y=False):
             if log_y:
                 y = np.abs(y)
                 y[y <= 0] = np.nan
-            data.append(_line(x[:n], y[:n], label, color, dash="dash", width=2,
+            data.append(_line(x[:n], y[:n], label, color, dash="dash", width=2, units=("mm", fu),
                               legendgroup=f"ref{k}"))
     for c in cases:
         h = _case_rows(history, c["name"])
@@ -635,6 +640,7 @@ def _fig_force(meta, history, cases, styles, log_y=False):
             y[y <= 0] = np.nan
         st = styles[c["name"]]
         data.append(_line(h["load"], y, c["label"], st["color"], dash=st["dash"], width=2.2,
+                          units=("mm", fu),
                           mode="lines+markers" if len(h) < 40 else "lines"))
     if log_y:
         lay = _layout("|Force| against applied displacement (log scale)",
@@ -656,7 +662,7 @@ def _fig_step_size(history, cases, styles):
             continue
         st = styles[c["name"]]
         data.append(_line(h["load"], h["step_size"], c["label"], st["color"], dash=st["dash"],
-                          mode="lines+markers", width=1.2, log_y=True,
+                          mode="lines+markers", width=1.2, log_y=True, units=("mm", "mm"),
                           marker={"color": st["color"], "size": 4}))
     lay = _layout("Step size against displacement (Fig. 10)",
                   "applied displacement u (mm)", "step size Δu (mm)")
@@ -674,10 +680,12 @@ def _fig_wf_alpha(history, cases, styles):
         st = styles[c["name"]]
         if h["fracture_energy"].notna().any():
             data.append(_line(h["load"], h["fracture_energy"], f"W_f – {c['label']}",
-                              st["color"], dash="solid", legendgroup=c["name"]))
+                              st["color"], dash="solid", legendgroup=c["name"],
+                              units=("mm", "N mm")))
         if h["max_alpha"].notna().any():
             data.append(_line(h["load"], h["max_alpha"], f"max α – {c['label']}",
-                              st["color"], dash="dot", yaxis="y2", legendgroup=c["name"]))
+                              st["color"], dash="dot", yaxis="y2", legendgroup=c["name"],
+                              units=("mm", "-")))
     lay = _layout("W_f and max α against displacement",
                   "applied displacement u (mm)", "fracture energy W_f (N mm)")
     lay["yaxis2"] = _axis("max α (-)", overlaying="y", side="right", range=[0, 1.05],
@@ -701,7 +709,8 @@ def _fig_newton(history, cases, styles):
         st = styles[c["name"]]
         if h["newton_iterations"].notna().any():
             data.append(_line(h["step"], h["newton_iterations"], f"Newton iterations – {c['label']}",
-                              st["color"], width=1.2, mode="lines", legendgroup=c["name"]))
+                              st["color"], width=1.2, mode="lines", legendgroup=c["name"],
+                              units=("-", "-")))
         if h["cutbacks"].notna().any():
             hc = h[h["cutbacks"].fillna(0) > 0]
             data.append({"type": "scatter", "mode": "markers", "x": _rs(hc["step"]),
@@ -735,7 +744,7 @@ def _fig_energies(history, cases, styles):
                 data.append(_line(h["load"], h[col], name, st["color"] if len(cases) > 1 else
                                   {"elastic_energy": "#1f77b4", "regularisation_energy": "#2ca02c",
                                    "fracture_energy": "#d62728"}[col], dash=dash,
-                                  legendgroup=c["name"]))
+                                  legendgroup=c["name"], units=("mm", "N mm")))
     lay = _layout("Energies against applied displacement", "applied displacement u (mm)",
                   "energy (N mm)")
     lay["updatemenus"] = _log_toggle()
@@ -1161,6 +1170,7 @@ def render_report(run_dir, output=None) -> Path:
                 "n_frames": len(payload["frames"]), "n_recorded": payload["n_recorded"],
                 "has_alpha": payload.get("has_alpha", False),
                 "fracture": any((fr.get("alpha_max") or 0) > 0 for fr in payload["frames"]),
+                "edges": payload["nt"] <= MAX_EDGE_TRIANGLES,
                 "nt": payload["nt"], "nv": payload["nv"], "dim": payload["dim"],
                 "u_max": payload.get("u_max"), "n_void": payload["n_void"],
                 "snap_id": f"snap-{len(mesh_info)}", "mesh_id": f"mesh-{len(mesh_info)}",
@@ -1174,7 +1184,7 @@ def render_report(run_dir, output=None) -> Path:
         if not mi["same_as"]:
             n_other = len(mi["shared_with"])
             mesh_plot_ids[mi["mesh_id"]] = {
-                "case": mi["case"], "kind": "rho",
+                "case": mi["case"], "kind": "rho", "edges": mi["edges"],
                 "label": mi["label"] + (f" (same mesh in {n_other} more case"
                                         f"{'s' if n_other > 1 else ''})" if n_other else "")}
 
