@@ -939,16 +939,17 @@ def _published_peak(meta: dict, case: str | None, fu: str) -> float | None:
     return None
 
 
-def speed_error_rows(entries: list[dict]) -> list[dict]:
+def speed_error_rows(entries: list[dict], finest: dict | None = None) -> list[dict]:
     """Add errors to entries {label, wall_time_s, peak_force, size, published}.
 
-    The finest entry is the one with the largest ``size`` (steps or elements); errors in peak
-    force are relative, in %.
+    The finest entry is ``finest`` if given, else the one with the largest ``size`` (steps or
+    elements); errors in peak force are relative, in %.
     """
     valid = [e for e in entries if _finite(e.get("peak_force"))]
     if not valid:
         return []
-    finest = max(valid, key=lambda e: (e.get("size") or 0))
+    if finest is None or finest not in valid:
+        finest = max(valid, key=lambda e: (e.get("size") or 0))
     pf_ref = float(finest["peak_force"])
     for e in entries:
         e["finest"] = e is finest
@@ -986,17 +987,25 @@ def _fig_speed_error(entries: list[dict], title: str, size_label: str):
 
 
 def _run_speed_entries(meta, history, cases):
+    """Speed/error rows of the cases of one run. The finest case is the one the runner names
+    as ``results[case]["reference_case"]`` if any, else the case with most accepted steps."""
     fu = meta.get("force_unit") or "N"
-    entries = []
+    results = meta.get("results") or {}
+    ref = next((r.get("reference_case") for r in results.values()
+                if isinstance(r, dict) and r.get("reference_case")), None)
+    entries, finest = [], None
     for c in cases:
         nums = case_numbers(meta, history, c["name"])
         if not _finite(nums.get("peak_force")):
             continue
-        entries.append({"label": c["label"], "wall_time_s": nums.get("wall_time_s"),
-                        "peak_force": nums["peak_force"], "size": nums.get("steps") or 0,
-                        "size_text": fmt_u(nums.get("steps"), "steps"),
-                        "published": _published_peak(meta, c["name"], fu)})
-    return speed_error_rows(entries)
+        e = {"label": c["label"], "wall_time_s": nums.get("wall_time_s"),
+             "peak_force": nums["peak_force"], "size": nums.get("steps") or 0,
+             "size_text": fmt_u(nums.get("steps"), "steps"),
+             "published": _published_peak(meta, c["name"], fu)}
+        entries.append(e)
+        if c["name"] == ref:
+            finest = e
+    return speed_error_rows(entries, finest)
 
 
 # --------------------------------------------------------------------------------------------

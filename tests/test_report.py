@@ -297,3 +297,14 @@ def test_index_leaves_failed_runs_out_of_the_comparison(tmp_path):
     assert '<td>b <span class="pill">finest</span></td>' in sec
     runs_sec = page[page.index('id="runs"'):page.index('id="speed-error"')]
     assert "pill-failed" in runs_sec and "c <span" in runs_sec
+
+
+def test_speed_error_honours_reference_case(tpb_run):
+    meta = json.loads((tpb_run / "metadata.json").read_text())
+    for r in meta["results"].values():
+        r["reference_case"] = "coarse"
+    (tpb_run / "metadata.json").write_text(json.dumps(meta))
+    meta, history, _ = report.load_run(tpb_run)
+    entries = report._run_speed_entries(meta, history, report._case_list(meta))
+    finest = [e for e in entries if e["finest"]]
+    assert [e["label"] for e in finest] == ["du_max = 2e-3 mm"]
