@@ -204,9 +204,15 @@ class Simulation:
             if not res.converged:
                 return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
                                "message": res.message, "staggered_iterations": passes, "projected": projected}
-            if self.staggered == "single" or s.alpha is None:
-                break
+            if s.alpha is None:
+                break  # nothing may break: no history to keep
             H_trial = s.trial_history()
+            if not np.all(np.isfinite(H_trial)):
+                return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
+                               "message": "history not finite (J <= 0 at a history point)",
+                               "staggered_iterations": passes, "projected": projected}
+            if self.staggered == "single":
+                break
             alpha_prev_pass = s.alpha.vec.FV().NumPy().copy()
         else:
             if self.staggered == "converged" and s.alpha is not None:
@@ -214,7 +220,7 @@ class Simulation:
                                "message": f"staggered passes did not converge in {self.max_staggered}",
                                "staggered_iterations": passes, "projected": projected}
         return True, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
-                      "staggered_iterations": max(passes, 1), "projected": projected}
+                      "staggered_iterations": max(passes, 1), "projected": projected, "H_trial": H_trial}
 
     def advance(self) -> dict:
         """Take one accepted step (with cut-backs as needed); return its history row.
@@ -249,7 +255,8 @@ class Simulation:
                 raise StepFailure(msg, self.history, saved)
             du = smaller
         step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new > self.t else 0.0
-        s.update_history()
+        if s.alpha is not None:
+            s.update_history(info["H_trial"])
         self.t = t_new
         self.step += 1
         ctrl.accepted()

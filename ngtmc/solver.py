@@ -377,7 +377,9 @@ class Solver:
             for _ in range(opt.max_line_search):
                 u.data = u0 + s * du
                 E = self._energy(u)
-                if math.isfinite(E):
+                # guard: finite energy (J > 0 at the energy's quadrature points) and J > 0 at the
+                # history points too (Psi_plus there feeds the history; NaN would poison it)
+                if math.isfinite(E) and self.min_J() > 0.0:
                     if lifted:
                         accepted = True
                         break
@@ -451,9 +453,10 @@ class Solver:
         """max(H_{n-1}, Psi_plus(u)) at the quadrature points (Eq. 7), MPa; not committed."""
         return np.maximum(self.H_committed, self.psi_plus_values())
 
-    def update_history(self):
-        """Commit H_n = max(H_{n-1}, Psi_plus(u_n)) and alpha_n (step 3)."""
-        self.H_committed = self.trial_history()
+    def update_history(self, H_trial: np.ndarray | None = None):
+        """Commit H_n = max(H_{n-1}, Psi_plus(u_n)) and alpha_n (step 3). ``H_trial``: the
+        already computed :meth:`trial_history` of the current u, to avoid computing it twice."""
+        self.H_committed = self.trial_history() if H_trial is None else H_trial
         self.H.vec.FV().NumPy()[:] = self.H_committed
         if self.alpha is not None:
             self.alpha_committed = self.alpha.vec.FV().NumPy().copy()

@@ -251,3 +251,51 @@ def test_checks_catch_a_bad_page(chromium, tmp_path):
     assert finder.status.get("data-errors") == "1"
     reqs = _page_requests(netlog)
     assert any("example.invalid" in u for u in reqs), reqs
+
+
+PROBE = """<script>
+(function wait() {
+  var st = document.getElementById("render-status");
+  if (st.getAttribute("data-done") !== "1") { return setTimeout(wait, 50); }
+  var el = document.getElementById("snap-0"), out = [];
+  function vis() {
+    return el.data.map(function (t, i) { return t.visible === false ? null : i; })
+                  .filter(function (i) { return i !== null; }).join(",");
+  }
+  out.push(vis());
+  el.emit("plotly_sliderchange", {step: {value: "0"}});
+  setTimeout(function () {
+    out.push(vis());
+    el.emit("plotly_buttonclicked", {button: {label: "true scale × 1"}});
+    setTimeout(function () {
+      out.push(vis());
+      var d = document.createElement("div");
+      d.id = "probe"; d.setAttribute("data-out", out.join(";"));
+      d.setAttribute("data-title", el.layout.title.text);
+      d.setAttribute("data-errors", String(window.__errors.length));
+      document.body.appendChild(d);
+    }, 300);
+  }, 300);
+})();
+</script></body>"""
+
+
+def test_snapshot_slider_and_scale_toggle(chromium, tmp_path):
+    """Moving the slider shows another frame; the scale buttons switch to the true scale."""
+    import numpy as np
+    run = write_run(tmp_path / "inter", cases=[("main", "main", 2e-3, {})])
+    z = dict(np.load(run / "snapshots.npz"))
+    z["main__u"] = z["main__u"] * 0.05  # small displacements: drawn magnified
+    np.savez(run / "snapshots.npz", **z)
+    page = report.render_report(run)
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.read_text(encoding="utf-8").replace("</body>", PROBE), encoding="utf-8")
+    proc = _run_chromium(chromium, probe, tmp_path, "--dump-dom")
+    assert proc.returncode == 0
+    m = re.search(r'<div id="probe" data-out="([^"]*)" data-title="([^"]*)" data-errors="(\d+)"',
+                  proc.stdout)
+    assert m, "interaction probe did not run"
+    start, frame0, true_scale = (set(x.split(",")) for x in m.group(1).split(";"))
+    assert start != frame0 != true_scale and start != true_scale
+    assert "true scale" in m.group(2)
+    assert m.group(3) == "0"

@@ -1,0 +1,77 @@
+"""Hard cases that must run through to the end of their schedule without NaN."""
+import numpy as np
+import pytest
+
+import ngtmc
+from scenes import notched_plate, two_blocks
+
+
+def _finite(h):
+    cols = ["force", "elastic_energy", "regularisation_energy", "fracture_energy", "min_J"]
+    return np.all(np.isfinite(h[cols].to_numpy()))
+
+
+def test_two_bodies_pressed_through_a_thin_void():
+    """Void layer 0.05 mm between two blocks, squeezed until min J < 0.05. The force is near zero
+    while the void is open and rises steeply once it is squeezed."""
+    sim = ngtmc.Simulation(two_blocks(gap=0.05, gamma0=1e-5), 0.0515, ngtmc.AdaptiveStepControl(du_max=0.005, du_min=1e-6))
+    res = sim.run()
+    h = res.history
+    print(f"\nsqueeze: {len(h) - 1} steps, {int(h.newton_iterations.sum())} Newton iterations, "
+          f"{int(h.cutbacks.sum())} cut-backs, min J {h.min_J.iloc[-1]:.4f}, force {h.force.iloc[-1]:.4g} N, "
+          f"{res.wall_time:.1f} s")
+    assert _finite(h)
+    assert h["load"].iloc[-1] == pytest.approx(0.0515)
+    assert h["min_J"].iloc[-1] < 0.05
+    assert np.all(h["min_J"] > 0)
+    f_half = np.interp(0.025, h["load"], h["force"])
+    assert h["force"].iloc[-1] > 100 * f_half
+    # parasitic void force at half the gap is of order gamma0 times the solid's stiffness
+    assert f_half < 1e-3 * 1000.0 * 1.0 * 0.025 / 0.05
+
+
+def test_crack_running_unstably_with_cut_back_and_regrown_steps():
+    """Single-edge-notched plate in tension: the crack runs unstably across the ligament. The
+    Newton limit is set low (2 iterations) so that steps fail and are halved while the crack
+    runs, and regrow afterwards; the step rule of Eq. 20 also shrinks them as W_f jumps."""
+    scene = notched_plate(maxh=0.1, h_band=0.025, l0=0.05)
+    ctrl = ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=100.0, du_min=1e-7, n_s=3)
+    sim = ngtmc.Simulation(scene, 0.009, ctrl, newton=ngtmc.NewtonOptions(max_iterations=2))
+    res = sim.run()
+    h = res.history
+    print(f"\ncrack: {len(h) - 1} steps, {int(h.newton_iterations.sum())} Newton iterations, "
+          f"{int(h.cutbacks.sum())} cut-backs, smallest step {h.step_size[1:].min():.2e} mm, "
+          f"peak {h.force.max():.4g} N, {res.wall_time:.1f} s")
+    assert _finite(h)
+    assert h["load"].iloc[-1] == pytest.approx(0.009)
+    assert h["max_alpha"].iloc[-1] > 0.99
+    assert h["force"].iloc[-1] < 0.1 * h["force"].max()  # the ligament is cut
+    assert h["cutbacks"].sum() > 0
+    i_small = int(h["step_size"][1:].idxmin())
+    assert h["step_size"].iloc[i_small] < 0.05 * 5e-4
+    assert h["step_size"].iloc[i_small:].max() > 0.5 * 5e-4  # regrown after the crack ran
+    assert np.all(np.diff(h["fracture_energy"]) >= -1e-12)
+
+
+def test_load_reversal_after_cracking():
+    """Crack partly, unload to zero, reload: no NaN, no damage growth while unloading, the force at
+    zero load returns to about zero, and the reloading stiffness is lower than the initial one."""
+    scene = notched_plate(maxh=0.1, h_band=0.025, l0=0.05)
+    sched = ngtmc.Schedule([0, 0.0045, 0.0, 0.006])
+    sim = ngtmc.Simulation(scene, sched, ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=100.0, du_min=1e-7))
+    h = sim.run().history
+    assert _finite(h)
+    load = h["load"].to_numpy()
+    i_turn = int(np.argmax(load >= 0.0045))
+    i_zero = int(np.argmax((np.arange(len(load)) > i_turn) & (load == 0.0)))
+    assert load[i_turn] == 0.0045 and load[i_zero] == 0.0 and load[-1] == 0.006
+    a = h["max_alpha"].to_numpy()
+    assert a[i_turn] > 0.1  # damaged before unloading
+    assert np.all(np.abs(np.diff(a[i_turn:i_zero + 1])) < 1e-9)
+    wf = h["fracture_energy"].to_numpy()
+    assert np.all(np.abs(np.diff(wf[i_turn:i_zero + 1])) < 1e-9 * max(wf[i_turn], 1e-30))
+    f = h["force"].to_numpy()
+    assert abs(f[i_zero]) < 1e-6 * f.max()
+    k0 = f[1] / load[1]
+    k_reload = f[i_zero + 1] / load[i_zero + 1]
+    assert k_reload < 0.98 * k0

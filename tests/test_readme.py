@@ -1,0 +1,32 @@
+"""The custom scene of README.md runs as written and gives a sensible history."""
+import pathlib
+import re
+
+import numpy as np
+
+README = pathlib.Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_readme_scene_runs(capsys):
+    text = README.read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert blocks, "README has no python example"
+    code = blocks[0]
+    assert len(code.strip().splitlines()) <= 45
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    h = namespace["history"]
+    assert h["load"].iloc[-1] == 0.065
+    assert np.all(np.isfinite(h["force"]))
+    # near-zero force while the 0.05 mm void is open, then contact
+    assert abs(np.interp(0.025, h["load"], h["force"])) < 0.01 * h["force"].max()
+    assert h["force"].max() > 1.0
+    assert h["min_J"].min() > 0
+
+
+def test_readme_states_the_two_commands():
+    text = README.read_text()
+    assert 'pip install -e . && ngtmc run three-point-bending' in text
+    assert 'pip install -e ".[test]" && python -m pytest' in text
+    ci = (README.parent / ".ci" / "run").read_text()
+    assert 'pip install -e ".[test]" && python -m pytest' in ci

@@ -1,0 +1,118 @@
+"""Bad input gives clear errors naming the parameter and the allowed range; failures keep the history."""
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+import ngtmc
+from scenes import bar_mesh, tension_bar, two_blocks
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"E": 0.0, "nu": 0.3}, r"E = 0.0 MPa .*> 0"),
+    ({"E": -5.0, "nu": 0.3}, r"E = -5.0"),
+    ({"E": 1.0, "nu": 0.5}, r"nu .*\(-1, 0.5\)"),
+    ({"E": 1.0, "nu": -1.0}, r"nu .*\(-1, 0.5\)"),
+    ({"E": 1.0, "nu": 0.3, "l0": 0.0}, r"l0 = 0.0 mm"),
+    ({"E": 1.0, "nu": 0.3, "Gc": -1.0}, r"Gc = -1.0 N/mm"),
+    ({"E": float("nan"), "nu": 0.3}, r"E = nan"),
+])
+def test_material_parameters(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ngtmc.Material(**kwargs)
+
+
+def test_density_outside_unit_interval():
+    sc = tension_bar(density={"bar": 1.2})
+    with pytest.raises(ValueError, match=r"rho must lie in \[0, 1\]"):
+        sc.check()
+    mesh = bar_mesh()
+    sc = tension_bar(density=-0.1 * np.ones(mesh.ne))
+    with pytest.raises(ValueError, match="rho"):
+        sc.check()
+
+
+def test_density_array_of_wrong_length():
+    with pytest.raises(ValueError, match="elements"):
+        tension_bar(density=np.ones(3)).check()
+
+
+def test_unknown_region_and_boundary_names_list_the_valid_ones():
+    with pytest.raises(ValueError, match=r"unknown region 'beam'.*\['bar'\]"):
+        dataclasses.replace(tension_bar(), fracture_regions="beam").check()
+    sc = tension_bar()
+    sc.load = ngtmc.DisplacementLoad("rigth", "x")
+    with pytest.raises(ValueError, match=r"unknown boundary 'rigth'.*'right'"):
+        sc.check()
+    sc = tension_bar()
+    sc.supports = [ngtmc.Support("lft", x=True)]
+    with pytest.raises(ValueError, match="unknown boundary 'lft'"):
+        sc.check()
+
+
+def test_missing_material_and_support_without_component():
+    sc = two_blocks()
+    sc.materials = {"lower": ngtmc.Material(1.0, 0.3)}
+    with pytest.raises(ValueError, match="have no material"):
+        sc.check()
+    sc = tension_bar()
+    sc.supports = [ngtmc.Support("left")]
+    with pytest.raises(ValueError, match="holds no component"):
+        sc.check()
+
+
+def test_regulariser_needs_order_two():
+    sc = dataclasses.replace(two_blocks(), order=1)
+    with pytest.raises(ValueError, match="order >= 2"):
+        sc.check()
+    with pytest.raises(ValueError, match="kbar_r"):
+        ngtmc.Regulariser("void", length=1.0, kbar_r=0.0)
+
+
+def test_scene_scalars():
+    for field, value, match in [("gamma0", 0.0, "gamma0"), ("gamma0", 1.5, "gamma0"), ("thickness", 0.0, "thickness"),
+                                ("residual_stiffness", -1e-6, "residual_stiffness"), ("gc_b", -1.0, "gc_b")]:
+        with pytest.raises(ValueError, match=match):
+            dataclasses.replace(tension_bar(), **{field: value}).check()
+    with pytest.raises(ValueError, match="direction"):
+        ngtmc.DisplacementLoad("right", "up")
+
+
+def test_schedule_and_step_control():
+    with pytest.raises(ValueError, match="start at 0"):
+        ngtmc.Schedule([0.1, 1.0])
+    with pytest.raises(ValueError, match="two equal consecutive"):
+        ngtmc.Schedule([0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="at least two"):
+        ngtmc.Schedule([0])
+    with pytest.raises(ValueError, match="du_max"):
+        ngtmc.AdaptiveStepControl(du_max=0.0)
+    with pytest.raises(ValueError, match="du_min"):
+        ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-2)
+    with pytest.raises(ValueError, match="k_u"):
+        ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=-1)
+    with pytest.raises(ValueError, match="staggered"):
+        ngtmc.Simulation(tension_bar(), 0.01, staggered="twice")
+
+
+def test_unresolved_length_scale_warns():
+    with pytest.warns(ngtmc.ResolutionWarning, match=r"l0/2"):
+        tension_bar(l0=0.05, maxh=0.1).check()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ngtmc.ResolutionWarning)
+        tension_bar(l0=0.5, maxh=0.1).check()
+
+
+def test_failure_at_minimum_step_keeps_the_history():
+    """Newton limited to 3 iterations and no halving possible: the step where the void is squeezed
+    hard fails, and the exception carries every accepted step."""
+    sim = ngtmc.Simulation(two_blocks(), 0.06, ngtmc.AdaptiveStepControl(du_max=0.005, du_min=0.005),
+                           newton=ngtmc.NewtonOptions(max_iterations=3))
+    with pytest.raises(ngtmc.StepFailure, match="minimum increment") as info:
+        sim.run()
+    h = info.value.history
+    assert len(h) >= 5
+    assert list(h["step"]) == list(range(len(h)))
+    assert np.all(np.isfinite(h["force"]))
+    assert info.value.state is not None
