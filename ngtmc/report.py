@@ -338,6 +338,7 @@ def _param_value(params: dict, key: str):
 # --------------------------------------------------------------------------------------------
 def _axis(title: str, **kw) -> dict:
     ax = {"title": {"text": title}, "showgrid": True, "gridcolor": "#e6e6e6",
+          "exponentformat": "power",
           "zeroline": False, "showline": True, "linecolor": "#444", "mirror": True,
           "ticks": "outside", "automargin": True}
     ax.update(kw)
@@ -417,8 +418,6 @@ def _log_axis(ax: dict, values) -> dict:
     if v.size and v.max() / v.min() >= 100:
         decades = math.log10(v.max() / v.min())
         ax["dtick"] = 1 if decades <= 8 else int(math.ceil(decades / 8))
-    elif v.size:
-        ax["dtick"] = "D2"  # less than two decades: label 1, 2, 5 only
     return ax
 
 
@@ -1189,6 +1188,7 @@ def render_report(run_dir, output=None) -> Path:
         if mi["n_frames"]:
             mesh_plot_ids[mi["snap_id"]] = {"case": mi["case"], "kind": "alpha",
                                             "label": mi["label"], "scale": fmt(mi["scale"]),
+                                            "scale_num": mi["scale"],
                                             "fracture": mi["fracture"]}
         if not mi["same_as"]:
             n_other = len(mi["shared_with"])
