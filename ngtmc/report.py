@@ -660,11 +660,11 @@ def _fig_step_size(history, cases, styles):
         if not len(h) or not h["step_size"].notna().any():
             continue
         st = styles[c["name"]]
-        data.append(_line(h["load"], h["step_size"], c["label"], st["color"], dash=st["dash"],
+        data.append(_line(h["load"], h["step_size"].abs(), c["label"], st["color"], dash=st["dash"],
                           mode="lines+markers", width=1.2, log_y=True, units=("mm", "mm"),
                           marker={"color": st["color"], "size": 4}))
     lay = _layout("Step size against displacement (Fig. 10)",
-                  "applied displacement u (mm)", "step size Δu (mm)")
+                  "applied displacement u (mm)", "step size |Δu| (mm)")
     _log_axis(lay["yaxis"], [v for t in data for v in t["y"] if v is not None])
     _legend_below(lay, rows=_legend_rows([t["name"] for t in data]))
     return {"data": data, "layout": lay}

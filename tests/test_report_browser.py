@@ -76,7 +76,10 @@ def _page_requests(netlog: Path) -> list[str]:
     try:
         log = json.loads(text)
     except json.JSONDecodeError:  # log cut short when the browser exits: close it
-        log = json.loads(text.rstrip(",") + "]}")
+        try:
+            log = json.loads(text.rstrip(",") + "]}")
+        except json.JSONDecodeError:  # cut inside an event: drop the partial event
+            log = json.loads(text[:text.rindex("},")] + "}]}")
     types = {v: k for k, v in log["constants"]["logEventTypes"].items()}
     urls = []
     for ev in log.get("events", []):
