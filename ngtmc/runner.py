@@ -47,6 +47,9 @@ HISTORY_COLUMNS = ["case", "step", "load", "force", "fracture_energy", "dissipat
                    "regularisation_energy", "max_alpha", "min_J", "newton_iterations", "staggered_iterations",
                    "cutbacks", "alpha_projected", "step_size", "wall_time", "solve_time", "assembly_time"]
 
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
 _UNITS = {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"}
 
 
@@ -57,6 +60,7 @@ def write_atomic(path, data: bytes | str):
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix="." + path.name + ".", suffix=".tmp")
     try:
+        os.chmod(tmp, 0o666 & ~_UMASK)     # mkstemp creates 0600; give the file the usual permissions
         with os.fdopen(fd, "wb") as f:
             f.write(data.encode() if isinstance(data, str) else data)
             f.flush()
@@ -548,6 +552,7 @@ class _Run:
             return
 
         self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: building the scene ({case.label})")
+        cpu0 = time.process_time() - float((ck or {}).get("case_meta", {}).get("cpu_time_s", 0.0))
         t_build = time.perf_counter()
         scene = case.build_scene()
         sim = Simulation(scene, case.schedule, case.control, progress=False, **(case.options or {}))
@@ -587,6 +592,7 @@ class _Run:
             now = time.perf_counter()
             if (s.step - last["ck_step"] >= self.checkpoint_every or now - last["ck_time"] >= self.checkpoint_seconds):
                 self.snaps[case.name] = snaps.arrays(case.name)
+                cm["cpu_time_s"] = time.process_time() - cpu0
                 self.save_checkpoint(case, last["state"], snaps, done=False)
                 self.write_all()
                 last["ck_step"], last["ck_time"] = s.step, time.perf_counter()
@@ -598,6 +604,8 @@ class _Run:
             self.rows[case.name] = [dict(r) for r in state["rows"]]
             res = case_results(pd.DataFrame(self.rows[case.name]))
             res["status"] = status
+            # CPU time of all threads of this process (wall time inflates when the machine is shared)
+            res["cpu_time_s"] = cm["cpu_time_s"] = time.process_time() - cpu0
             if error:
                 res["error"] = error
             self.results[case.name] = res
