@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as _dt
-import html
 import json
 import math
 import sys
@@ -270,13 +269,6 @@ def _rs(values, sig: int = 6) -> list:
         else:
             out.append(float(f"{v:.{sig}g}"))
     return out
-
-
-def _rd(values, decimals: int) -> list:
-    """List of floats rounded to a fixed number of decimals (NaN become None)."""
-    arr = np.round(np.asarray(values, dtype=float).ravel(), decimals)
-    return [None if not math.isfinite(v) else (int(v) if decimals <= 0 else float(v))
-            for v in arr.tolist()]
 
 
 _UNIT_PREFIX = {"N": 1.0, "kN": 1e3, "MN": 1e6, "mN": 1e-3}
@@ -1079,7 +1071,7 @@ def _parameter_rows(params: dict) -> list[dict]:
         elif isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
             vs = fmt(v, 6)
         else:
-            vs = html.unescape(str(v))
+            vs = str(v)
         rows.append({"name": name, "value": vs, "unit": unit, "description": desc})
     return rows
 
