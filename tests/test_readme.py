@@ -16,11 +16,14 @@ def test_readme_scene_runs(capsys):
     namespace = {}
     exec(compile(code, "README.md", "exec"), namespace)
     h = namespace["history"]
-    assert h["load"].iloc[-1] == 0.065
+    assert h["load"].iloc[-1] == 0.075
     assert np.all(np.isfinite(h["force"]))
-    # near-zero force while the 0.05 mm void is open, then contact
-    assert abs(np.interp(0.025, h["load"], h["force"])) < 0.01 * h["force"].max()
-    assert h["force"].max() > 1.0
+    peak = h["force"].max()
+    # small parasitic force while the 0.05 mm void is open (gamma0 = 1e-4), then contact
+    assert abs(np.interp(0.01, h["load"], h["force"])) < 0.02 * peak
+    # the ligament breaks: damage reaches one and the force drops after the peak
+    assert h["max_alpha"].iloc[-1] > 0.99
+    assert h["force"].iloc[-1] < 0.8 * peak
     assert h["min_J"].min() > 0
 
 
