@@ -801,7 +801,8 @@ def _nice_scale(s: float) -> float:
 def deformation_scale(vertices: np.ndarray, u: np.ndarray) -> float:
     """Scale factor for drawing the deformed mesh (dimensionless).
 
-    1 when the largest displacement is already visible (>= 2 % of the domain size), else a round
+    1 when the largest displacement is already visible (>= 1 % of the domain size, about ten
+    pixels on screen), else a round
     number (1, 2, 5 x 10^k) making the largest displacement about 5 % of the domain size.
     """
     v = np.asarray(vertices, dtype=float)
@@ -809,7 +810,7 @@ def deformation_scale(vertices: np.ndarray, u: np.ndarray) -> float:
     um = float(np.nanmax(np.linalg.norm(np.asarray(u, dtype=float), axis=-1))) if np.size(u) else 0.0
     if ext <= 0 or um <= 0 or not math.isfinite(um):
         return 1.0
-    if um >= 0.02 * ext:
+    if um >= 0.01 * ext:
         return 1.0
     return _nice_scale(0.05 * ext / um)
 
