@@ -1,0 +1,850 @@
+"""Exact gradients of a recorded load path: the discrete adjoint of the single-pass staggered scheme.
+
+    path = record_path(scene, Schedule([0, 0.2]), AdaptiveStepControl(du_max=0.0125))
+    g = gradient(path, ExternalWork(), wrt=("rho", "E", "Gc", "l0", "gamma0"))
+    g["value"]        # J, in the objective's unit (N mm for ExternalWork)
+    g["rho"]          # dJ/drho, one entry per element (numpy array, J-unit per unit density)
+    g["E"]            # dJ/dE, J-unit per MPa
+
+What is differentiated (see ``docs/sensitivities.md`` for the derivation): the scheme that
+:class:`~ngtmc.simulation.Simulation` actually solved with ``staggered="single"``. At every recorded
+load step n, with the imposed displacement lambda_n held fixed,
+
+1. alpha_n = P_n(A(H_{n-1})^{-1} f(H_{n-1})), P_n the projection onto [alpha_{n-1}, 1];
+2. R(u_n; alpha_n, rho) = 0 on the free dofs (Dirichlet values lambda_n e, independent of rho);
+3. H_n = max(H_{n-1}, Psi_plus(u_n)) at the history quadrature points.
+
+**Held fixed:** the sequence of loads lambda_1..lambda_N chosen by the adaptive step control (its
+decisions depend on W_f and on Newton failures, which are not differentiable events), the active
+sets of the projection in (1) and of the max in (3) (derivatives are taken along the branch that
+was active; they are one-sided where a branch is tied), and the Newton iterates (only the converged
+u_n enters, through the implicit function theorem). :func:`replay` re-runs exactly this load
+sequence without adaptivity, which is what a finite-difference check must compare against.
+
+**Memory:** every accepted state is stored (u_n, alpha_n, H_n as float64 arrays):
+``Path.memory_bytes`` = 8 (N + 1) (ndof_u + ndof_alpha + n_history_points) bytes. The reverse sweep
+re-assembles the tangent K_n and the phase-field matrix A_n from the stored states (one assembly
+and one factorization of each per step) instead of storing factorizations.
+
+**Cost:** one gradient = per step one assembly + factorization + solve of K_n and of A_n plus a few
+linear-form assemblies; the forward run needs several Newton iterations per step, so a gradient
+costs about one forward run or less (measured in ``tests/test_sensitivities.py``).
+
+Parameters that can be differentiated (``wrt``): ``"rho"`` (element densities), ``"gamma0"``, and
+the material constants ``"E"``, ``"nu"``, ``"Gc"``, ``"l0"`` of the *default material* (the material
+of the first fracture region, or of the first region if nothing may break). ``"E:region"`` names the
+material of another region. The regulariser stiffness k_r = kbar_r L^2 K0 depends on E and nu and is
+differentiated with them.
+
+Units: mm, N, MPa. Forces and energies are for the scene thickness in 2D.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import re
+import time
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+import ngsolve as ngs
+
+from . import fracture
+from .materials import deformation_gradient, psi_plus
+from .scene import Scene
+from .simulation import Simulation
+from .solver import NewtonOptions, Solver
+from .stepping import AdaptiveStepControl, Schedule
+
+__all__ = [
+    "Path", "record_path", "replay", "gradient", "evaluate", "parameter_value", "design_mask",
+    "Objective", "ReactionAtStep", "ExternalWork", "FinalFractureEnergy", "ComplianceAtStep",
+    "UserObjective", "ForceCurveObjective", "directional_fd", "taylor_test",
+]
+
+_MATERIAL_KEYS = ("E", "nu", "Gc", "l0")
+
+
+# ====================================================================== recorded path
+@dataclass
+class Path:
+    """A recorded load path: the solver, the load sequence and every accepted state.
+
+    Attributes
+    ----------
+    solver : Solver
+        The solver that ran the path (reused by :func:`replay` and :func:`gradient`).
+    loads : ndarray (N + 1,)
+        Imposed displacement of each state, mm; ``loads[0] = 0`` is the unloaded initial state.
+    states : list of dict
+        ``states[n]`` holds ``u``, ``alpha`` (alpha_n) and ``H`` (H_n) as numpy arrays.
+    forces : ndarray (N + 1,)
+        Reaction on the loaded boundary at each state, N (for the scene thickness).
+    rho : ndarray (n_elements,)
+        Pseudo-density the path was computed with.
+    parameters : dict
+        Values of the differentiable scalar parameters (``gamma0``, ``E``, ``nu``, ``Gc``, ``l0`` of
+        every material, keyed ``"E@<id>"``) the path was computed with.
+    forward_time : float
+        Wall time of the forward run, s.
+    """
+
+    solver: Solver
+    loads: np.ndarray
+    states: list
+    forces: np.ndarray
+    rho: np.ndarray
+    parameters: dict
+    forward_time: float = 0.0
+    history: object = None
+    _engine: object = field(default=None, repr=False)
+
+    @property
+    def n_steps(self) -> int:
+        """Number of load steps N (states 1..N)."""
+        return len(self.states) - 1
+
+    @property
+    def memory_bytes(self) -> int:
+        """Bytes held by the stored states (u, alpha, H per state)."""
+        return int(sum(a.nbytes for st in self.states for a in st.values() if isinstance(a, np.ndarray)))
+
+    def activate(self, n: int | None = None):
+        """Put the path's rho and parameters into the solver; with ``n``, also load state n
+        (u_n, alpha_n, H_n into ``solver.u``, ``solver.alpha``, ``solver.H``)."""
+        s = self.solver
+        s.rho.vec.FV().NumPy()[:] = self.rho
+        _set_parameters(s, self.parameters)
+        if n is not None:
+            st = self.states[n]
+            s.u.vec.FV().NumPy()[:] = st["u"]
+            if s.alpha is not None:
+                s.alpha.vec.FV().NumPy()[:] = st["alpha"]
+            s.H.vec.FV().NumPy()[:] = st["H"]
+            s.load = float(self.loads[n])
+            s._r_valid = False
+
+
+def _all_parameters(solver: Solver) -> dict:
+    out = {"gamma0": solver.gamma0}
+    for mid, pars in solver.material_parameters.items():
+        for k, p in pars.items():
+            out[f"{k}@{mid}"] = p
+    return out
+
+
+def _snapshot_parameters(solver: Solver) -> dict:
+    return {k: float(p.Get()) for k, p in _all_parameters(solver).items()}
+
+
+def _set_parameters(solver: Solver, values: dict):
+    pars = _all_parameters(solver)
+    for k, v in values.items():
+        pars[k].Set(float(v))
+
+
+def _default_region(solver: Solver) -> str:
+    if solver.fracture_regions:
+        for r in solver.mesh.GetMaterials():
+            if any(re.fullmatch(f, r) for f in solver.fracture_regions):
+                return r
+    return solver.mesh.GetMaterials()[0]
+
+
+def _resolve(solver: Solver, name: str) -> str:
+    """Internal key (``"gamma0"`` or ``"E@<id>"``) of a user-facing parameter name."""
+    if name == "gamma0":
+        return "gamma0"
+    key, _, region = name.partition(":")
+    if key not in _MATERIAL_KEYS:
+        raise ValueError(f"unknown parameter {name!r}; use 'rho', 'gamma0', one of {_MATERIAL_KEYS} or e.g. 'E:<region>'")
+    region = region or _default_region(solver)
+    if region not in solver.mesh.GetMaterials():
+        raise ValueError(f"parameter {name!r}: unknown region {region!r}; regions: {sorted(set(solver.mesh.GetMaterials()))}")
+    return f"{key}@{id(solver.scene.material_of(region))}"
+
+
+def parameter_value(path: Path, name: str) -> float:
+    """Value of a scalar parameter (``"E"``, ``"Gc:beam"``, ``"gamma0"``, ...) on a path."""
+    return path.parameters[_resolve(path.solver, name)]
+
+
+def design_mask(path_or_solver, regions: str | Sequence[str]) -> np.ndarray:
+    """Boolean mask over elements of the named regions (regex, or a list of them)."""
+    s = path_or_solver.solver if isinstance(path_or_solver, Path) else path_or_solver
+    pats = [regions] if isinstance(regions, str) else list(regions)
+    mats = s.mesh.GetMaterials()
+    ids = [i for i, m in enumerate(mats) if any(re.fullmatch(p, m) for p in pats)]
+    idx = np.array([el.index for el in s.mesh.Elements(ngs.VOL)])
+    return np.isin(idx, ids)
+
+
+# ====================================================================== forward
+def _reset(solver: Solver):
+    st = {"u": np.zeros(solver.fes_u.ndof), "H": np.zeros(solver.irs.ndof), "load": np.array(0.0)}
+    if solver.alpha is not None:
+        st["alpha"] = np.zeros(solver.fes_a.ndof)
+        st["alpha_committed"] = np.zeros(solver.fes_a.ndof)
+    solver.set_state(st)
+
+
+def _capture(solver: Solver) -> dict:
+    st = {"u": solver.u.vec.FV().NumPy().copy(), "H": solver.H_committed.copy()}
+    if solver.alpha is not None:
+        st["alpha"] = solver.alpha_committed.copy()
+    return st
+
+
+def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
+                newton: NewtonOptions | None = None, **options) -> Path:
+    """Run ``scene`` through ``schedule`` (adaptive steps as in :class:`~ngtmc.simulation.Simulation`)
+    and store every accepted state for :func:`gradient`.
+
+    ``options`` go to :class:`~ngtmc.simulation.Simulation`; only ``staggered="single"`` (the paper's
+    scheme, the default) can be differentiated. For gradients that agree with finite differences to
+    1e-4, converge Newton tightly, e.g. ``newton=NewtonOptions(rtol=1e-12)``. Returns a :class:`Path`."""
+    if options.get("staggered", "single") != "single":
+        raise ValueError("record_path: only staggered='single' (the paper's scheme) can be differentiated")
+    t0 = time.perf_counter()
+    sim = Simulation(scene, schedule, control, newton=newton, **options)
+    s = sim.solver
+    states = [_capture(s)]
+    forces = [s.reaction()]
+
+    def grab(sim_, row):
+        states.append(_capture(sim_.solver))
+        forces.append(float(row["force"]))
+
+    result = sim.run(callbacks=[grab])
+    loads = np.asarray(result.history["load"], dtype=float)
+    return Path(solver=s, loads=loads, states=states, forces=np.asarray(forces), rho=s.rho.vec.FV().NumPy().copy(),
+                parameters=_snapshot_parameters(s), forward_time=time.perf_counter() - t0, history=result.history)
+
+
+def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = None) -> Path:
+    """Re-run the SAME load sequence as ``path`` (no adaptivity, no cut-backs) with another design
+    ``rho`` (per element) and/or other ``parameters`` ({name: value}, names as in ``wrt`` of
+    :func:`gradient`, e.g. ``{"E": 1010.0, "gamma0": 2e-4}``). Unnamed values are those of ``path``.
+
+    Uses the solver of ``path`` (its fields are overwritten). Raises RuntimeError if Newton fails at a
+    step. Returns a new :class:`Path` (sharing the solver)."""
+    s = path.solver
+    t0 = time.perf_counter()
+    new_rho = path.rho.copy() if rho is None else np.asarray(rho, dtype=float).copy()
+    if new_rho.shape != path.rho.shape:
+        raise ValueError(f"rho has shape {new_rho.shape}; the mesh has {path.rho.size} elements")
+    pars = dict(path.parameters)
+    for name, v in (parameters or {}).items():
+        pars[_resolve(s, name)] = float(v)
+    s.rho.vec.FV().NumPy()[:] = new_rho
+    _set_parameters(s, pars)
+    _reset(s)
+    states = [_capture(s)]
+    forces = [s.reaction()]
+    for n, load in enumerate(path.loads[1:], start=1):
+        s.solve_phase_field()
+        res = s.solve_displacement(float(load))
+        if not res.converged:
+            raise RuntimeError(f"replay: Newton failed at step {n} (load {load:.6g} mm): {res.message}")
+        s.update_history()
+        states.append(_capture(s))
+        forces.append(s.reaction())
+    return Path(solver=s, loads=path.loads.copy(), states=states, forces=np.asarray(forces), rho=new_rho,
+                parameters=pars, forward_time=time.perf_counter() - t0)
+
+
+# ====================================================================== objectives
+@dataclass
+class Seeds:
+    """Partial derivatives of an objective at one step (explicit dependence only).
+
+    force: dJ/dF_n (F_n the reaction of step n, N), handled through the residual;
+    cfs: list of (CF, region regex or None, weight): J contains weight * thickness * int CF dx,
+    differentiated symbolically with respect to u, alpha, rho and the parameters."""
+
+    force: float = 0.0
+    cfs: list = field(default_factory=list)
+
+    def __iadd__(self, other: "Seeds"):
+        self.force += other.force
+        self.cfs.extend(other.cfs)
+        return self
+
+
+class Objective:
+    """Base class: J = sum over recorded steps of functionals of (u_n, alpha_n, rho, parameters).
+
+    A subclass implements ``value(path) -> float`` and ``seeds(path, n) -> Seeds | None`` (the
+    explicit partial derivatives at step n, as a weight on the reaction F_n and/or CFs to
+    differentiate symbolically). Objectives can be added and scaled: ``ExternalWork() - 0.1 *
+    FinalFractureEnergy()``."""
+
+    unit = ""
+
+    def value(self, path: Path) -> float:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def seeds(self, path: Path, n: int) -> Seeds | None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __add__(self, other):
+        return _Combination([(1.0, self), (1.0, other)])
+
+    def __sub__(self, other):
+        return _Combination([(1.0, self), (-1.0, other)])
+
+    def __mul__(self, c):
+        return _Combination([(float(c), self)])
+
+    __rmul__ = __mul__
+
+    def __neg__(self):
+        return _Combination([(-1.0, self)])
+
+
+class _Combination(Objective):
+    def __init__(self, terms):
+        self.terms = []
+        for c, o in terms:
+            if isinstance(o, _Combination):
+                self.terms.extend((c * c2, o2) for c2, o2 in o.terms)
+            else:
+                self.terms.append((c, o))
+
+    def value(self, path):
+        return sum(c * o.value(path) for c, o in self.terms)
+
+    def seeds(self, path, n):
+        out = Seeds()
+        for c, o in self.terms:
+            s = o.seeds(path, n)
+            if s is not None:
+                out.force += c * s.force
+                out.cfs.extend((cf, reg, c * w) for cf, reg, w in s.cfs)
+        return out
+
+
+def _step_index(path: Path, step: int) -> int:
+    n = step if step >= 0 else path.n_steps + 1 + step
+    if not 1 <= n <= path.n_steps:
+        raise ValueError(f"step {step} is outside the recorded steps 1..{path.n_steps}")
+    return n
+
+
+class ReactionAtStep(Objective):
+    """J = F_n, the reaction on the loaded boundary at recorded step ``step`` (negative counts from
+    the end), N."""
+
+    unit = "N"
+
+    def __init__(self, step: int = -1):
+        self.step = step
+
+    def value(self, path):
+        return float(path.forces[_step_index(path, self.step)])
+
+    def seeds(self, path, n):
+        return Seeds(force=1.0) if n == _step_index(path, self.step) else None
+
+
+class ComplianceAtStep(Objective):
+    """J = F_n lambda_n, N mm: the work of the reaction on the imposed displacement at step ``step``
+    (the end compliance of displacement control; twice the stored energy in linear elasticity)."""
+
+    unit = "N mm"
+
+    def __init__(self, step: int = -1):
+        self.step = step
+
+    def value(self, path):
+        n = _step_index(path, self.step)
+        return float(path.forces[n] * path.loads[n])
+
+    def seeds(self, path, n):
+        return Seeds(force=float(path.loads[n])) if n == _step_index(path, self.step) else None
+
+
+class ExternalWork(Objective):
+    """J = sum_n (F_n + F_{n-1})/2 (lambda_n - lambda_{n-1}), N mm: trapezoidal external work along
+    the whole recorded path (energy absorbed; unloading steps count negatively)."""
+
+    unit = "N mm"
+
+    def _weights(self, path):
+        lam = path.loads
+        c = np.zeros_like(lam)
+        d = np.diff(lam)
+        c[1:] += d / 2
+        c[:-1] += d / 2
+        return c
+
+    def value(self, path):
+        return float(np.dot(self._weights(path), path.forces))
+
+    def seeds(self, path, n):
+        return Seeds(force=float(self._weights(path)[n]))
+
+
+class FinalFractureEnergy(Objective):
+    """J = W_f at the last step, N mm (Eq. 19 times the thickness, as the history's
+    ``fracture_energy`` column): int Gc(rho) (alpha_N^2/l0 + l0 |grad alpha_N|^2)."""
+
+    unit = "N mm"
+
+    def value(self, path):
+        return _cf_value(path, path.n_steps, self.seeds(path, path.n_steps).cfs)
+
+    def seeds(self, path, n):
+        if n != path.n_steps:
+            return None
+        s = path.solver
+        if s.alpha is None:
+            return Seeds()
+        cache = self.__dict__.setdefault("_cf", {})
+        if id(s) not in cache:
+            cache[id(s)] = (s, fracture.fracture_energy_density(s.alpha, s.Gc, s.l0))
+        return Seeds(cfs=[(cache[id(s)][1], s._frac_re, 1.0)])
+
+
+class UserObjective(Objective):
+    """J = sum_n thickness * int density(solver, n) dx, differentiated automatically.
+
+    density(solver, n) -> CoefficientFunction or None, built from the solver's fields
+    ``solver.u``, ``solver.alpha``, ``solver.rho`` (which hold u_n, alpha_n, rho when it is called)
+    and its coefficient functions (``solver.K``, ``solver.G``, ``solver.Gc``, ``solver.l0``,
+    parameters): every dependence on them is differentiated with ``CF.Diff``. Return None at steps
+    that do not contribute. The integral uses the history quadrature rule (exact for polynomials of
+    degree 2p) over ``region`` (regex; None = whole mesh). ``unit``: unit of J, for reports. Return
+    the SAME CF object at every step if possible (its derivative forms are then built once)."""
+
+    def __init__(self, density: Callable, region: str | None = None, unit: str = ""):
+        self.density = density
+        self.region = region
+        self.unit = unit
+
+    def seeds(self, path, n):
+        cf = self.density(path.solver, n)
+        return None if cf is None else Seeds(cfs=[(cf, self.region, 1.0)])
+
+    def value(self, path):
+        total = 0.0
+        for n in range(1, path.n_steps + 1):
+            path.activate(n)
+            s = self.seeds(path, n)
+            if s is not None:
+                total += _cf_value(path, n, s.cfs, activated=True)
+        return total
+
+
+class ForceCurveObjective(Objective):
+    """J = phi(F_1, ..., F_N), a function of the recorded reaction forces (e.g. the misfit to a
+    measured curve, for calibration). ``phi(forces, loads) -> (value, dphi/dforces)``, forces and
+    loads arrays of length N + 1 (index 0 = unloaded state).
+
+    :meth:`least_squares` builds the usual misfit 1/2 sum_n (F_n - F_meas(lambda_n))^2, N^2, with
+    F_meas interpolated linearly in the measured (load, force) points."""
+
+    def __init__(self, phi: Callable, unit: str = ""):
+        self.phi = phi
+        self.unit = unit
+
+    @classmethod
+    def least_squares(cls, measured_loads, measured_forces):
+        ml = np.asarray(measured_loads, dtype=float)
+        mf = np.asarray(measured_forces, dtype=float)
+
+        def phi(forces, loads):
+            r = forces - np.interp(loads, ml, mf)
+            r[0] = 0.0
+            return 0.5 * float(r @ r), r
+
+        return cls(phi, unit="N^2")
+
+    def value(self, path):
+        return float(self.phi(path.forces, path.loads)[0])
+
+    def seeds(self, path, n):
+        if not hasattr(path, "_phi_cache") or path._phi_cache[0] is not self:
+            path._phi_cache = (self, np.asarray(self.phi(path.forces, path.loads)[1], dtype=float))
+        return Seeds(force=float(path._phi_cache[1][n]))
+
+
+def evaluate(path: Path, objective: Objective) -> float:
+    """Value of ``objective`` on ``path``."""
+    return float(objective.value(path))
+
+
+# ====================================================================== adjoint engine
+def _rules(mesh, order):
+    if mesh.dim == 2:
+        types = (ngs.TRIG, ngs.QUAD)
+    else:
+        types = (ngs.TET, ngs.HEX, ngs.PRISM, ngs.PYRAMID)
+    return {et: ngs.IntegrationRule(et, order) for et in types}
+
+
+class _FormSet:
+    """Linear forms of the partial derivatives of sum_i int cf_i, built on first use."""
+
+    def __init__(self, eng, pieces, with_alpha):
+        self.eng = eng
+        self.pieces = pieces
+        self.with_alpha = with_alpha
+        self.forms = {}
+
+    def __contains__(self, key):
+        if key == "alpha":
+            return self.with_alpha and self.eng.s.alpha is not None
+        return key == "rho" or key in self.eng.params or key in self.forms
+
+    def __setitem__(self, key, lf):
+        self.forms[key] = lf
+
+    def __getitem__(self, key):
+        if key not in self.forms:
+            eng, s = self.eng, self.eng.s
+            if key == "rho":
+                lf = ngs.LinearForm(eng.fes_rho)
+                for cf, meas in self.pieces:
+                    lf += cf.Diff(s.rho, eng.q) * meas
+            elif key == "alpha":
+                lf = ngs.LinearForm(s.fes_a)
+                for cf, meas in self.pieces:
+                    lf += cf.Diff(s.alpha, eng.b) * meas
+            else:
+                p = eng.params[key]
+                lf = ngs.LinearForm(eng.fes_rho)
+                for cf, meas in self.pieces:
+                    lf += cf.Diff(p) * eng.q * meas
+            self.forms[key] = lf
+        return self.forms[key]
+
+
+class _Engine:
+    """Forms for the partial derivatives of the discrete scheme, built once per solver."""
+
+    def __init__(self, solver: Solver):
+        s = self.s = solver
+        mesh = s.mesh
+        self.fes_rho = s.rho.space
+        self.q = self.fes_rho.TestFunction()
+        self.v = s.fes_u.TestFunction()
+        self.params = _all_parameters(s)
+        self.terms = s.energy_terms(s.u)
+        self.dx_u_order = self._detect_u_rule()
+        # adjoint-carrying GridFunctions
+        self.z_u = ngs.GridFunction(s.fes_u)      # residual contraction vector
+        self.z_H = ngs.GridFunction(s.irs)        # adjoint density of Psi_plus at the history points
+        self._forms = {}
+        if s.alpha is not None:
+            self.b = s.fes_a.TestFunction()
+            self.a_trial = ngs.GridFunction(s.fes_a)  # unprojected alpha solution
+            self.mu = ngs.GridFunction(s.fes_a)       # phase-field adjoint
+            self.frac_ind = mesh.MaterialCF({r: 1.0 for r in set(mesh.GetMaterials())
+                                             if any(re.fullmatch(f, r) for f in s.fracture_regions)}, default=0.0)
+            self.dx_Hf = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=s.irs.GetIntegrationRules())
+            self.dx_af = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=_rules(mesh, 2))
+        self._build()
+
+    # ---------------------------------------------------------------- integration rule of a_u
+    def _detect_u_rule(self) -> int:
+        """Order of the quadrature rule NGSolve uses for the displacement energy (found by
+        reproducing a_u.Apply at a perturbed state: the partial derivatives must use that rule)."""
+        s = self.s
+        u0 = s.u.vec.FV().NumPy().copy()
+        rng = np.random.default_rng(0)
+        s.u.vec.FV().NumPy()[:] = 1e-6 * s.length_scale * rng.standard_normal(u0.size)  # near the reference state
+        r = s.u.vec.CreateVector()
+        s.a_u.Apply(s.u.vec, r)
+        R = r.FV().NumPy().copy()
+        best = None
+        for order in sorted({s.order, 2 * s.order, s.order + 1, 2 * s.order - 1, 2 * s.order + 1, 2 * s.order + 2, 1}):
+            lf = ngs.LinearForm(s.fes_u)
+            for _, dens, reg in self.terms:
+                lf += dens.Diff(s.u, self.v) * ngs.dx(definedon=s.mesh.Materials(reg), intrules=_rules(s.mesh, order))
+            lf.Assemble()
+            err = np.max(np.abs(lf.vec.FV().NumPy() - R)) / max(np.max(np.abs(R)), 1e-300)
+            if np.isfinite(err) and (best is None or err < best[0]):
+                best = (err, order)
+        s.u.vec.FV().NumPy()[:] = u0
+        s._r_valid = False
+        if best is None or best[0] > 1e-8:
+            raise RuntimeError(f"could not reproduce the integration rule of the displacement energy (best: {best})")
+        return best[1]
+
+    def _dx_u(self, reg):
+        return ngs.dx(definedon=self.s.mesh.Materials(reg), intrules=_rules(self.s.mesh, self.dx_u_order))
+
+    # ---------------------------------------------------------------- forms
+    def _scalar_forms(self, pieces, with_alpha=True):
+        """pieces: list of (CF, measure). Returns a lazily built dict of LinearForms for the partial
+        derivatives of sum int CF: "alpha" (on the phase-field space), "rho" (one entry per element)
+        and one per parameter key (on the rho space; the derivative is the sum of its entries)."""
+        return _FormSet(self, pieces, with_alpha)
+
+    def _build(self):
+        s = self.s
+        # <R(u; alpha, rho, p), z_u>: partials with respect to alpha, rho, p
+        self.res_pieces = [(dens.Diff(s.u, self.z_u), self._dx_u(reg)) for _, dens, reg in self.terms]
+        self.res_forms = self._scalar_forms(self.res_pieces)
+        if s.alpha is not None:
+            # history: sum_k w_k z_H(x_k) Psi_plus(u, rho, p)(x_k) over the fracture regions
+            pp = psi_plus(deformation_gradient(s.u), s.K, s.G)
+            self.psi_cf = pp
+            piece = [(self.z_H * pp, self.dx_Hf)]
+            self.hist_forms = self._scalar_forms(piece)
+            self.hist_u = ngs.LinearForm(s.fes_u)
+            self.hist_u += self.z_H * pp.Diff(s.u, self.v) * self.dx_Hf
+            # <R_a(a_trial; H, rho, p), mu> without the H terms (those are handled pointwise)
+            ga, mu = self.a_trial, self.mu
+            Sa = s.Gc / s.l0 * ga * mu + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(ga), ngs.Grad(mu))
+            self.alpha_forms = self._scalar_forms([(Sa, self.dx_af)], with_alpha=False)
+            self._irs_tmp = ngs.GridFunction(s.irs)
+
+    def cf_forms(self, cf, region):
+        key = (id(cf), region)
+        if key not in self._forms:
+            s = self.s
+            reg = region if region is not None else ".*"
+            meas = ngs.dx(definedon=s.mesh.Materials(reg), intrules=s.irs.GetIntegrationRules())
+            forms = self._scalar_forms([(cf, meas)])
+            lf_u = ngs.LinearForm(s.fes_u)
+            lf_u += cf.Diff(s.u, self.v) * meas
+            forms["u"] = lf_u
+            self._forms[key] = (cf, forms)  # keep cf alive so id() stays unique
+        return self._forms[key][1]
+
+
+def _integrate_rule(path: Path, cf, region):
+    s = path.solver
+    reg = region if region is not None else ".*"
+    meas = ngs.dx(definedon=s.mesh.Materials(reg), intrules=s.irs.GetIntegrationRules())
+    lf = ngs.LinearForm(s.rho.space)
+    lf += cf * s.rho.space.TestFunction() * meas
+    lf.Assemble()
+    return float(np.sum(lf.vec.FV().NumPy()))
+
+
+def _cf_value(path: Path, n: int, cfs, activated: bool = False) -> float:
+    if not activated:
+        path.activate(n)
+    t = path.solver.thickness
+    return sum(w * t * _integrate_rule(path, cf, reg) for cf, reg, w in cfs)
+
+
+def _engine(path: Path) -> _Engine:
+    s = path.solver
+    eng = getattr(s, "_sensitivity_engine", None)
+    if eng is None:
+        eng = _Engine(s)
+        s._sensitivity_engine = eng
+    return eng
+
+
+def _wrt_keys(solver, wrt):
+    out = []
+    for name in wrt:
+        if name == "rho":
+            continue
+        out.append((name, _resolve(solver, name)))
+    return out
+
+
+def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0")) -> dict:
+    """dJ/drho and dJ/dparameters of ``objective`` on the recorded ``path`` by one reverse sweep.
+
+    Returns a dict: ``"value"`` (J), ``"rho"`` (array, one entry per element, dJ/drho_e) if asked,
+    one float per scalar parameter name in ``wrt`` (dJ/dE in J-unit/MPa, dJ/dGc in J-unit/(N/mm),
+    dJ/dl0 in J-unit/mm, dJ/dgamma0 dimensionless), ``"time"`` (wall time of the sweep, s) and
+    ``"forward_time"`` (wall time of the path's forward run, s).
+
+    The derivative is exact for the discrete scheme with the recorded load steps and active sets
+    held fixed (see the module docstring). Only the solver's fields are changed; the solver is
+    left in the final state of the path."""
+    t0 = time.perf_counter()
+    wrt = tuple(wrt)
+    s = path.solver
+    path.activate()
+    eng = _engine(path)
+    keys = _wrt_keys(s, wrt)
+    value = objective.value(path)
+    N = path.n_steps
+    t = s.thickness
+    free = s._free_np
+    e_np = s._e_np
+    g_rho = np.zeros(s.rho.space.ndof)
+    g_par = {k: 0.0 for _, k in keys}
+    has_a = s.alpha is not None
+    eta = np.zeros(s.irs.ndof)                      # adjoint density of H_n (per unit quadrature weight)
+    abar_carry = np.zeros(s.fes_a.ndof) if has_a else None
+    Kinv = None
+    Ainv = None
+
+    def add_scalar(forms, sign=1.0, alpha_acc=None):
+        nonlocal g_rho
+        if "rho" in wrt:
+            forms["rho"].Assemble()
+            g_rho += sign * forms["rho"].vec.FV().NumPy()
+        for _, k in keys:
+            forms[k].Assemble()
+            g_par[k] += sign * float(np.sum(forms[k].vec.FV().NumPy()))
+        if alpha_acc is not None and "alpha" in forms:
+            forms["alpha"].Assemble()
+            alpha_acc += sign * forms["alpha"].vec.FV().NumPy()
+
+    for n in range(N, 0, -1):
+        path.activate(n)
+        seeds = objective.seeds(path, n) or Seeds()
+        ubar = np.zeros(s.fes_u.ndof)
+        abar = abar_carry.copy() if has_a else None
+        # ---- explicit partials of CF terms of the objective
+        for cf, reg, w in seeds.cfs:
+            forms = eng.cf_forms(cf, reg)
+            forms["u"].Assemble()
+            ubar += w * t * forms["u"].vec.FV().NumPy()
+            add_scalar(forms, w * t, abar)
+        # ---- (3) history H_n = max(H_{n-1}, Psi_plus(u_n))
+        if has_a:
+            H_prev = path.states[n - 1]["H"]
+            eng._irs_tmp.Interpolate(eng.psi_cf)
+            psi = eng._irs_tmp.vec.FV().NumPy()
+            mask = psi > H_prev
+            zH = np.where(mask, eta, 0.0)
+            eta = np.where(mask, 0.0, eta)
+            if np.any(zH != 0.0):
+                eng.z_H.vec.FV().NumPy()[:] = zH
+                eng.hist_u.Assemble()
+                ubar += eng.hist_u.vec.FV().NumPy()
+                add_scalar(eng.hist_forms, 1.0, abar)
+        # ---- (2) displacement equilibrium: reaction seeds and the adjoint solve with K_n
+        s.a_u.AssembleLinearization(s.u.vec)
+        if seeds.force != 0.0:
+            Ke = s.a_u.mat.CreateColVector()
+            ev = s.a_u.mat.CreateColVector()
+            ev.FV().NumPy()[:] = e_np
+            Ke.data = s.a_u.mat * ev
+            ubar += seeds.force * t * Ke.FV().NumPy()
+        z = seeds.force * t * e_np
+        ubar[~free] = 0.0
+        if np.any(ubar != 0.0):
+            if Kinv is None:
+                Kinv = s.a_u.mat.Inverse(s.free, inverse=s.newton.linear_solver)
+            else:
+                Kinv.Update()
+            rhs = s.a_u.mat.CreateColVector()
+            rhs.FV().NumPy()[:] = ubar
+            lam = s.a_u.mat.CreateColVector()
+            lam.data = Kinv * rhs
+            lamN = lam.FV().NumPy()
+            lamN[~free] = 0.0
+            z = z - lamN
+        if np.any(z != 0.0):
+            eng.z_u.vec.FV().NumPy()[:] = z
+            add_scalar(eng.res_forms, 1.0, abar)
+        # ---- (1) phase field: unprojected solve from H_{n-1} and the projection onto [alpha_{n-1}, 1]
+        if has_a:
+            a_prev = path.states[n - 1]["alpha"]
+            s.H.vec.FV().NumPy()[:] = path.states[n - 1]["H"]
+            s.a_alpha.Assemble()
+            s.f_alpha.Assemble()
+            if Ainv is None:
+                Ainv = s.a_alpha.mat.Inverse(s.fes_a.FreeDofs(), inverse="sparsecholesky")
+            else:
+                Ainv.Update()
+            eng.a_trial.vec.data = Ainv * s.f_alpha.vec
+            at = eng.a_trial.vec.FV().NumPy()
+            prev = at < a_prev
+            free_a = (~prev) & (at <= 1.0)
+            abar_carry = np.where(prev, abar, 0.0)
+            abar_t = np.where(free_a, abar, 0.0)
+            if np.any(abar_t != 0.0):
+                rhs = s.a_alpha.mat.CreateColVector()
+                rhs.FV().NumPy()[:] = abar_t
+                eng.mu.vec.data = Ainv * rhs
+                # d/dH of <mu, R_a> = 2 (a_trial - 1) mu per unit weight, at the history points
+                eng._irs_tmp.Interpolate(eng.frac_ind * 2 * (eng.a_trial - 1) * eng.mu)
+                eta = eta - eng._irs_tmp.vec.FV().NumPy()
+                add_scalar(eng.alpha_forms, -1.0)
+    out = {"value": value}
+    if "rho" in wrt:
+        out["rho"] = g_rho
+    for name, k in keys:
+        out[name] = g_par[k]
+    path.activate(N)
+    out["time"] = time.perf_counter() - t0
+    out["forward_time"] = path.forward_time
+    return out
+
+
+# ====================================================================== checks
+def _perturbed(path: Path, direction: dict, eps: float) -> Path:
+    rho = path.rho + eps * np.asarray(direction["rho"]) if "rho" in direction else None
+    pars = {k: parameter_value(path, k) + eps * v for k, v in direction.items() if k != "rho"}
+    return replay(path, rho=rho, parameters=pars)
+
+
+def directional_fd(path: Path, objective, direction: dict, eps: float, return_paths: bool = False):
+    """Central finite difference (J(p + eps d) - J(p - eps d)) / (2 eps) by two :func:`replay` runs.
+
+    objective: an Objective or a list of them (all evaluated on the same two replays; a list gives
+    a numpy array). direction: {"rho": array, "E": dE, ...} (absent entries are zero). With
+    ``return_paths`` also returns the two replayed paths (for :func:`active_set_changes`)."""
+    objs = objective if isinstance(objective, (list, tuple)) else [objective]
+    paths = [_perturbed(path, direction, sgn * eps) for sgn in (1.0, -1.0)]
+    fd = np.array([(o.value(paths[0]) - o.value(paths[1])) / (2 * eps) for o in objs])
+    path.activate()
+    out = fd if isinstance(objective, (list, tuple)) else float(fd[0])
+    return (out, paths) if return_paths else out
+
+
+def active_sets(path: Path) -> list:
+    """Per step n = 1..N the active branches of the scheme: ``"history"`` (bool per history point:
+    H_n > H_{n-1}, i.e. the max took Psi_plus), ``"alpha_held"`` (bool per phase-field dof:
+    alpha_n == alpha_{n-1}, irreversibility or the upper bound active) and ``"alpha_one"``
+    (alpha_n == 1)."""
+    out = []
+    for n in range(1, path.n_steps + 1):
+        a, b = path.states[n - 1], path.states[n]
+        d = {"history": b["H"] > a["H"]}
+        if "alpha" in b:
+            d["alpha_held"] = b["alpha"] == a["alpha"]
+            d["alpha_one"] = b["alpha"] >= 1.0
+        out.append(d)
+    return out
+
+
+def active_set_changes(path_a: Path, path_b: Path) -> dict:
+    """Number of history points and phase-field dofs whose active branch differs between two paths
+    of the same load sequence (a finite difference across a switch is not a derivative)."""
+    sa, sb = active_sets(path_a), active_sets(path_b)
+    out = {"history": 0, "alpha_held": 0, "alpha_one": 0}
+    for x, y in zip(sa, sb):
+        for k in out:
+            if k in x:
+                out[k] += int(np.count_nonzero(x[k] != y[k]))
+    return out
+
+
+def directional_derivative(grad: dict, direction: dict) -> float:
+    """<dJ/dp, d> for a gradient dict of :func:`gradient` and a direction as in :func:`directional_fd`."""
+    total = 0.0
+    for k, v in direction.items():
+        total += float(np.dot(grad[k], v)) if k == "rho" else float(grad[k]) * float(v)
+    return total
+
+
+def taylor_test(path: Path, objective: Objective, direction: dict, grad: dict, eps_list=(4e-2, 2e-2, 1e-2, 5e-3)) -> dict:
+    """Remainders |J(p + eps d) - J(p) - eps <dJ, d>| for decreasing eps; they shrink as eps^2 when
+    the gradient is right. Returns {"eps": [...], "remainder": [...], "order": [...]} (observed
+    orders between consecutive eps)."""
+    J0 = grad["value"]
+    dJ = directional_derivative(grad, direction)
+    rem = []
+    for eps in eps_list:
+        J = objective.value(_perturbed(path, direction, eps))
+        rem.append(abs(J - J0 - eps * dJ))
+    path.activate()
+    orders = [float(np.log(rem[i] / rem[i + 1]) / np.log(eps_list[i] / eps_list[i + 1])) for i in range(len(rem) - 1)]
+    return {"eps": list(eps_list), "remainder": rem, "order": orders}
+
+
+__all__ += ["Seeds", "directional_derivative", "active_sets", "active_set_changes"]
