@@ -103,12 +103,14 @@ class Simulation:
         True prints a progress line to stderr about every 5 s; a callable receives each row dict.
     max_steps : int
         Safety limit on accepted steps.
+    compile : True, "real" or False
+        How the energy expressions are compiled (see :class:`ngtmc.solver.Solver`).
     """
 
     def __init__(self, scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
                  staggered: str = "single", staggered_tol: float = 1e-3, max_staggered: int = 30,
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
-                 max_steps: int = 100000, compile: bool = True):
+                 max_steps: int = 100000, compile: bool | str = True):
         if not isinstance(schedule, Schedule):
             schedule = Schedule.monotonic(float(schedule))
         if control is None:
