@@ -727,12 +727,36 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
-    with ngs.TaskManager():
+    with _terminate_as_interrupt(), ngs.TaskManager():
         run.run(resume)
     run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
     if report or report is None:
         _render(out, strict=bool(report))
     return out
+
+
+class _terminate_as_interrupt:
+    """Within the block, SIGTERM raises KeyboardInterrupt (so a killed run is recorded as
+    "interrupted" with a checkpoint at its last accepted step). Main thread only."""
+
+    def __enter__(self):
+        import signal
+        import threading
+        self.old = None
+        if threading.current_thread() is threading.main_thread():
+            def handler(signum, frame):
+                raise KeyboardInterrupt(f"signal {signum}")
+            try:
+                self.old = signal.signal(signal.SIGTERM, handler)
+            except (ValueError, OSError):  # pragma: no cover
+                self.old = None
+        return self
+
+    def __exit__(self, *exc):
+        if self.old is not None:
+            import signal
+            signal.signal(signal.SIGTERM, self.old)
+        return False
 
 
 def _render(out: Path, strict: bool):

@@ -243,3 +243,21 @@ def test_cli_report_missing_function(tmp_path, capsys, monkeypatch):
 def test_top_level_exports():
     assert ngtmc.run_study is run_study
     assert ngtmc.list_studies() == list_studies()
+
+
+def test_sigterm_is_recorded_as_interrupted_and_resumable(full_run, tmp_path):
+    import os
+    import signal
+    out = tmp_path / "term"
+
+    def term(sim, row):
+        if row["step"] == 5:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(tiny_study(), output=out, report=False, progress=False, threads=1, callbacks=[term], vtk=False)
+    assert json.loads((out / "metadata.json").read_text())["status"] == "interrupted"
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL or callable(signal.getsignal(signal.SIGTERM))
+    run_study(tiny_study(), output=out, report=False, progress=False, threads=1, resume=True, vtk=False)
+    pd.testing.assert_frame_equal(_physics(pd.read_csv(full_run / "history.csv")),
+                                  _physics(pd.read_csv(out / "history.csv")), rtol=1e-9, atol=1e-12)
