@@ -30,14 +30,33 @@ def test_two_bodies_pressed_through_a_thin_void():
     assert f_half < 1e-3 * 1000.0 * 1.0 * 0.025 / 0.05
 
 
+def test_void_closure_with_failed_steps_halved_and_regrown():
+    """Large steps (0.02 mm on a 0.05 mm void) and a tight Newton budget (5 iterations): the steps
+    that squeeze the void fail, are halved until they converge, and double again after n_s
+    successes. The run reaches its end without NaN."""
+    sim = ngtmc.Simulation(two_blocks(gap=0.05, gamma0=1e-5), 0.06,
+                           ngtmc.AdaptiveStepControl(du_max=0.02, du_min=1e-6, n_s=2),
+                           newton=ngtmc.NewtonOptions(max_iterations=5))
+    h = sim.run().history
+    print(f"\nclosure: {len(h) - 1} steps, {int(h.newton_iterations.sum())} Newton iterations, "
+          f"{int(h.cutbacks.sum())} cut-backs")
+    assert _finite(h)
+    assert h["load"].iloc[-1] == pytest.approx(0.06)
+    assert h["cutbacks"].sum() >= 2
+    steps = h["step_size"].to_numpy()
+    i_min = int(np.argmin(steps[1:])) + 1
+    assert steps[i_min] <= 0.02 / 8
+    assert steps[i_min:].max() >= 2 * steps[i_min]  # regrown after the failures
+    assert h["min_J"].iloc[-1] < 0.01
+
+
 def test_crack_running_unstably_with_cut_back_and_regrown_steps():
-    """Single-edge-notched plate in tension: the crack runs unstably across the ligament. The
-    Newton limit is set low (2 iterations) so that steps fail and are halved while the crack
-    runs, and regrow afterwards; the step rule of Eq. 20 also shrinks them as W_f jumps."""
+    """Single-edge-notched plate in tension: the crack runs unstably across the ligament at almost
+    constant load. The step rule of Eq. 20 cuts the steps back by orders of magnitude while W_f
+    jumps, and they regrow to du_max once the ligament is cut."""
     scene = notched_plate(maxh=0.1, h_band=0.025, l0=0.05)
-    ctrl = ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=100.0, du_min=1e-7, n_s=3)
-    sim = ngtmc.Simulation(scene, 0.009, ctrl, newton=ngtmc.NewtonOptions(max_iterations=2))
-    res = sim.run()
+    ctrl = ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=100.0, du_min=1e-7)
+    res = ngtmc.Simulation(scene, 0.009, ctrl).run()
     h = res.history
     print(f"\ncrack: {len(h) - 1} steps, {int(h.newton_iterations.sum())} Newton iterations, "
           f"{int(h.cutbacks.sum())} cut-backs, smallest step {h.step_size[1:].min():.2e} mm, "
@@ -46,11 +65,11 @@ def test_crack_running_unstably_with_cut_back_and_regrown_steps():
     assert h["load"].iloc[-1] == pytest.approx(0.009)
     assert h["max_alpha"].iloc[-1] > 0.99
     assert h["force"].iloc[-1] < 0.1 * h["force"].max()  # the ligament is cut
-    assert h["cutbacks"].sum() > 0
     i_small = int(h["step_size"][1:].idxmin())
-    assert h["step_size"].iloc[i_small] < 0.05 * 5e-4
-    assert h["step_size"].iloc[i_small:].max() > 0.5 * 5e-4  # regrown after the crack ran
+    assert h["step_size"].iloc[i_small] < 1e-3 * 5e-4
+    assert h["step_size"].iloc[i_small:].max() > 0.3 * 5e-4  # regrown after the crack ran
     assert np.all(np.diff(h["fracture_energy"]) >= -1e-12)
+    assert np.all(np.diff(h["max_alpha"]) >= 0)
 
 
 def test_load_reversal_after_cracking():
@@ -67,9 +86,11 @@ def test_load_reversal_after_cracking():
     assert load[i_turn] == 0.0045 and load[i_zero] == 0.0 and load[-1] == 0.006
     a = h["max_alpha"].to_numpy()
     assert a[i_turn] > 0.1  # damaged before unloading
-    assert np.all(np.abs(np.diff(a[i_turn:i_zero + 1])) < 1e-9)
+    # single-pass scheme: alpha_n comes from H_{n-1}, so the first unloading step still takes the
+    # damage driven by the turning point's history; from then on nothing grows while unloading
+    assert np.all(np.abs(np.diff(a[i_turn + 1:i_zero + 1])) < 1e-9)
     wf = h["fracture_energy"].to_numpy()
-    assert np.all(np.abs(np.diff(wf[i_turn:i_zero + 1])) < 1e-9 * max(wf[i_turn], 1e-30))
+    assert np.all(np.abs(np.diff(wf[i_turn + 1:i_zero + 1])) < 1e-9 * max(wf[i_turn], 1e-30))
     f = h["force"].to_numpy()
     assert abs(f[i_zero]) < 1e-6 * f.max()
     k0 = f[1] / load[1]
