@@ -81,8 +81,8 @@ PARAMETERS = {
     "indenter_height": (0.3, "mm", "indenter height"),
     "support_length": (0.2, "mm", "length of each support segment"),
     "final_load": (0.2, "mm", "imposed downward displacement of the indenter top"),
-    "volume_fraction": (0.02, "-", "bound on the filler volume as a fraction of the pad"),
-    "initial_fill": (0.01, "-", "uniform initial density of the pad"),
+    "volume_fraction": (0.005, "-", "bound on the filler volume as a fraction of the pad"),
+    "initial_fill": (0.0025, "-", "uniform initial density of the pad"),
     "filter_radius": (0.15, "mm", "density filter radius"),
     "thickness": (1.0, "mm", "out-of-plane thickness"),
 }
@@ -281,14 +281,90 @@ def optimise(p: dict, iterations: int | None = None, callback=None):
     return prob, log
 
 
+def _vertex_fields(path, n):
+    """u (nv, 2) and alpha (nv,) at the mesh vertices for state n of a path."""
+    path.activate(n)
+    s = path.solver
+    mesh = s.mesh
+    pts = np.asarray(mesh.ngmesh.Coordinates())
+    nv = mesh.nv
+    u = np.column_stack([s.u.components[i].vec.FV().NumPy()[:nv] for i in range(2)])
+    # alpha lives on the beam only: evaluate at the vertices (0 off the beam)
+    mp = mesh(pts[:, 0], pts[:, 1])
+    a = np.asarray(s.alpha(mp)).ravel()
+    return u, np.clip(np.nan_to_num(a), 0.0, 1.0)
+
+
+def write_snapshots(out, cases: dict, n_frames: int = 4):
+    """snapshots.npz in the run-directory format for {case: path} (frames at evenly spaced states)."""
+    from ngtmc import runner
+
+    arrays = {}
+    for case, path in cases.items():
+        mesh = path.solver.mesh
+        pts = np.asarray(mesh.ngmesh.Coordinates())
+        tri = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+        idx = sorted({int(round(i)) for i in np.linspace(1, path.n_steps, n_frames)})
+        us, als = zip(*[_vertex_fields(path, n) for n in idx])
+        arrays.update({f"{case}__vertices": pts, f"{case}__triangles": tri, f"{case}__rho": path.rho,
+                       f"{case}__loads": path.loads[idx], f"{case}__u": np.array(us), f"{case}__alpha": np.array(als)})
+        path.activate()
+    import io
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    runner.write_atomic(_FsPath(out) / "snapshots.npz", buf.getvalue())
+
+
+def write_optimisation_page(out) -> _FsPath | None:
+    """optimisation.html (self-contained, plotly): objective against iteration, the pad design at the
+    saved iterations, force against displacement of the initial and final designs. Returns its
+    path, or None if plotly is missing."""
+    try:
+        import plotly.graph_objects as go
+        from plotly.subplots import make_subplots
+    except ImportError:  # pragma: no cover
+        return None
+    out = _FsPath(out)
+    opt = pd.read_csv(out / "optimisation.csv")
+    hist = pd.read_csv(out / "history.csv")
+    des = np.load(out / "designs.npz")
+    k = len(des["iterations"])
+    fig = make_subplots(rows=2 + k, cols=1, row_heights=[0.3, 0.3] + [0.4 / k] * k, vertical_spacing=0.06,
+                        subplot_titles=["objective W (external work, N mm) against iteration",
+                                        "force against displacement (N per mm thickness)"]
+                        + [f"pad density, iteration {int(i)} (W = {w:.4g} N mm)" for i, w in
+                           zip(des["iterations"], des["objective"])])
+    fig.add_trace(go.Scatter(x=opt["iteration"], y=opt["objective_W"], mode="lines+markers", name="W"), row=1, col=1)
+    for case in ("initial", "final"):
+        h = hist[hist["case"] == case]
+        fig.add_trace(go.Scatter(x=h["load"], y=h["force"], mode="lines+markers", name=f"{case} design"), row=2, col=1)
+    mask = des["pad_mask"]
+    c = des["centroids"][mask]
+    vmax = float(max(des["rho"][:, mask].max(), 1e-12))
+    for j in range(k):
+        fig.add_trace(go.Scatter(x=c[:, 0], y=c[:, 1], mode="markers", showlegend=False,
+                                 marker=dict(color=des["rho"][j][mask], cmin=0, cmax=vmax, colorscale="Viridis", size=9,
+                                             symbol="square", showscale=(j == 0),
+                                             colorbar=dict(title="rho", len=0.35, y=0.2))), row=3 + j, col=1)
+    fig.update_xaxes(title_text="iteration", row=1, col=1)
+    fig.update_xaxes(title_text="imposed displacement (mm)", row=2, col=1)
+    fig.update_layout(height=450 + 250 * k, width=900, title=TITLE)
+    page = out / "optimisation.html"
+    fig.write_html(page, include_plotlyjs=True, full_html=True)
+    return page
+
+
 def _history_rows(case: str, path) -> pd.DataFrame:
     h = path.history.copy()
     h.insert(0, "case", case)
     return h
 
 
-def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = None) -> _FsPath:
-    """Run the optimisation and write the run folder (see the module docstring). Returns its path."""
+def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = None, report: bool = True) -> _FsPath:
+    """Run the optimisation and write the run folder (see the module docstring): metadata.json,
+    history.csv (cases initial and final), snapshots.npz, optimisation.csv, designs.npz,
+    optimisation.html (objective against iteration, designs, force curves) and report.html (the
+    package's report of the two force curves, if it renders). Returns its path."""
     from ngtmc import runner
 
     out = _FsPath(out_dir)
@@ -334,6 +410,14 @@ def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = 
         "notes": "optimisation study: cases() gives only the initial design; run() writes optimisation.csv and designs.npz",
     }
     runner.write_atomic(out / "metadata.json", json.dumps(meta, indent=2, default=float) + "\n")
+    write_snapshots(out, {"initial": first["path"], "final": last["path"]})
+    write_optimisation_page(out)
+    if report:
+        try:
+            from ngtmc.report import render_report
+            render_report(out)
+        except Exception as e:  # the report is optional; the run's files are complete
+            print(f"[design_for_contact] report not rendered: {type(e).__name__}: {e}")
     return out
 
 
