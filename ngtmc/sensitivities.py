@@ -86,6 +86,10 @@ class Path:
         every material, keyed ``"E@<id>"``) the path was computed with.
     forward_time : float
         Wall time of the forward run, s.
+    checkpoint_every : int or None
+        None: every state is stored. k: only states 0, k, 2k, ... and N are stored; the others are
+        recomputed from the previous stored state when needed (:meth:`state`), one segment of at
+        most k - 1 states at a time (the reverse sweep then costs one extra forward run).
     """
 
     solver: Solver
@@ -96,7 +100,8 @@ class Path:
     parameters: dict
     forward_time: float = 0.0
     history: object = None
-    _engine: object = field(default=None, repr=False)
+    checkpoint_every: int | None = None
+    _segment: dict = field(default_factory=dict, repr=False)
 
     @property
     def n_steps(self) -> int:
@@ -104,18 +109,57 @@ class Path:
         return len(self.states) - 1
 
     @property
+    def state_bytes(self) -> int:
+        """Bytes of one state: 8 (ndof_u + ndof_alpha + n_history_points)."""
+        s = self.solver
+        return 8 * (s.fes_u.ndof + (s.fes_a.ndof if s.alpha is not None else 0) + s.irs.ndof)
+
+    @property
     def memory_bytes(self) -> int:
-        """Bytes held by the stored states (u, alpha, H per state)."""
-        return int(sum(a.nbytes for st in self.states for a in st.values() if isinstance(a, np.ndarray)))
+        """Bytes held by the stored states (u, alpha, H per stored state)."""
+        return int(sum(a.nbytes for st in self.states if st is not None for a in st.values() if isinstance(a, np.ndarray)))
+
+    @property
+    def peak_memory_bytes(self) -> int:
+        """Stored states plus the largest recomputed segment (checkpointing), bytes."""
+        k = self.checkpoint_every
+        return self.memory_bytes + (0 if not k else (k - 1) * self.state_bytes)
+
+    def state(self, n: int) -> dict:
+        """State n (dict of u, alpha, H arrays), recomputed from the last stored state before it if
+        it was not stored (checkpointing). Recomputation overwrites the solver's fields."""
+        st = self.states[n]
+        if st is not None:
+            return st
+        if n not in self._segment:
+            self._recompute_segment(n)
+        return self._segment[n]
+
+    def _recompute_segment(self, n: int):
+        c = max(i for i in range(n) if self.states[i] is not None)
+        end = min(i for i in range(n, len(self.states)) if self.states[i] is not None)
+        s = self.solver
+        self.activate()
+        st = self.states[c]
+        full = {"u": st["u"], "H": st["H"], "load": np.array(self.loads[c])}
+        if s.alpha is not None:
+            full["alpha"] = st["alpha"]
+            full["alpha_committed"] = st["alpha"]
+        s.set_state(full)
+        self._segment = {}
+        for m in range(c + 1, end):
+            _step(s, float(self.loads[m]), m)
+            self._segment[m] = _capture(s)
 
     def activate(self, n: int | None = None):
         """Put the path's rho and parameters into the solver; with ``n``, also load state n
         (u_n, alpha_n, H_n into ``solver.u``, ``solver.alpha``, ``solver.H``)."""
         s = self.solver
+        if n is not None:
+            st = self.state(n)
         s.rho.vec.FV().NumPy()[:] = self.rho
         _set_parameters(s, self.parameters)
         if n is not None:
-            st = self.states[n]
             s.u.vec.FV().NumPy()[:] = st["u"]
             if s.alpha is not None:
                 s.alpha.vec.FV().NumPy()[:] = st["alpha"]
@@ -194,14 +238,36 @@ def _capture(solver: Solver) -> dict:
     return st
 
 
+def _step(s: Solver, load: float, n: int):
+    """One step of the single-pass scheme at a fixed load (as Simulation does it)."""
+    s.solve_phase_field()
+    res = s.solve_displacement(load)
+    if not res.converged:
+        raise RuntimeError(f"replay: Newton failed at step {n} (load {load:.6g} mm): {res.message}")
+    H = s.trial_history() if s.alpha is not None else None
+    if H is not None and not np.all(np.isfinite(H)):
+        raise RuntimeError(f"replay: history not finite at step {n} (J <= 0 at a history point)")
+    s.update_history(H)
+
+
+def _thin(states: list, k: int | None):
+    """Drop the state before the last one unless it is a checkpoint (index multiple of k)."""
+    m = len(states) - 2
+    if k and m > 0 and m % k != 0:
+        states[m] = None
+
+
 def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
-                newton: NewtonOptions | None = None, **options) -> Path:
+                newton: NewtonOptions | None = None, checkpoint_every: int | None = None, **options) -> Path:
     """Run ``scene`` through ``schedule`` (adaptive steps as in :class:`~ngtmc.simulation.Simulation`)
     and store every accepted state for :func:`gradient`.
 
     ``options`` go to :class:`~ngtmc.simulation.Simulation`; only ``staggered="single"`` (the paper's
     scheme, the default) can be differentiated. For gradients that agree with finite differences to
-    1e-4, converge Newton tightly, e.g. ``newton=NewtonOptions(rtol=1e-12)``. Returns a :class:`Path`."""
+    1e-4, converge Newton tightly, e.g. ``newton=NewtonOptions(rtol=1e-12)``. ``checkpoint_every``:
+    store only every k-th state (see :class:`Path`). Returns a :class:`Path`."""
+    if checkpoint_every is not None and int(checkpoint_every) < 1:
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
     if options.get("staggered", "single") != "single":
         raise ValueError("record_path: only staggered='single' (the paper's scheme) can be differentiated")
     t0 = time.perf_counter()
@@ -213,11 +279,13 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     def grab(sim_, row):
         states.append(_capture(sim_.solver))
         forces.append(float(row["force"]))
+        _thin(states, checkpoint_every)
 
     result = sim.run(callbacks=[grab])
     loads = np.asarray(result.history["load"], dtype=float)
     return Path(solver=s, loads=loads, states=states, forces=np.asarray(forces), rho=s.rho.vec.FV().NumPy().copy(),
-                parameters=_snapshot_parameters(s), forward_time=time.perf_counter() - t0, history=result.history)
+                parameters=_snapshot_parameters(s), forward_time=time.perf_counter() - t0, history=result.history,
+                checkpoint_every=checkpoint_every)
 
 
 def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = None) -> Path:
@@ -241,15 +309,12 @@ def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = 
     states = [_capture(s)]
     forces = [s.reaction()]
     for n, load in enumerate(path.loads[1:], start=1):
-        s.solve_phase_field()
-        res = s.solve_displacement(float(load))
-        if not res.converged:
-            raise RuntimeError(f"replay: Newton failed at step {n} (load {load:.6g} mm): {res.message}")
-        s.update_history()
+        _step(s, float(load), n)
         states.append(_capture(s))
         forces.append(s.reaction())
+        _thin(states, path.checkpoint_every)
     return Path(solver=s, loads=path.loads.copy(), states=states, forces=np.asarray(forces), rho=new_rho,
-                parameters=pars, forward_time=time.perf_counter() - t0)
+                parameters=pars, forward_time=time.perf_counter() - t0, checkpoint_every=path.checkpoint_every)
 
 
 # ====================================================================== objectives
@@ -692,6 +757,7 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
             alpha_acc += sign * forms["alpha"].vec.FV().NumPy()
 
     for n in range(N, 0, -1):
+        st_prev = path.state(n - 1)  # (may recompute a segment: before the solver fields are set)
         path.activate(n)
         seeds = objective.seeds(path, n) or Seeds()
         ubar = np.zeros(s.fes_u.ndof)
@@ -704,7 +770,7 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
             add_scalar(forms, w * t, abar)
         # ---- (3) history H_n = max(H_{n-1}, Psi_plus(u_n))
         if has_a:
-            H_prev = path.states[n - 1]["H"]
+            H_prev = st_prev["H"]
             eng._irs_tmp.Interpolate(eng.psi_cf)
             psi = eng._irs_tmp.vec.FV().NumPy()
             mask = psi > H_prev
@@ -742,8 +808,8 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
             add_scalar(eng.res_forms, 1.0, abar)
         # ---- (1) phase field: unprojected solve from H_{n-1} and the projection onto [alpha_{n-1}, 1]
         if has_a:
-            a_prev = path.states[n - 1]["alpha"]
-            s.H.vec.FV().NumPy()[:] = path.states[n - 1]["H"]
+            a_prev = st_prev["alpha"]
+            s.H.vec.FV().NumPy()[:] = st_prev["H"]
             s.a_alpha.Assemble()
             s.f_alpha.Assemble()
             if Ainv is None:
@@ -803,7 +869,7 @@ def active_sets(path: Path) -> list:
     (alpha_n == 1)."""
     out = []
     for n in range(1, path.n_steps + 1):
-        a, b = path.states[n - 1], path.states[n]
+        a, b = path.state(n - 1), path.state(n)
         d = {"history": b["H"] > a["H"]}
         if "alpha" in b:
             d["alpha_held"] = b["alpha"] == a["alpha"]
