@@ -156,8 +156,8 @@ def schedule(p: dict) -> ngtmc.Schedule:
 
 
 def control(p: dict) -> ngtmc.AdaptiveStepControl:
-    """Constant steps du (k_u = 0); Newton failures halve a step (down to du/64)."""
-    return ngtmc.AdaptiveStepControl(du_max=p["du"], k_u=0.0, du_min=p["du"] / 64)
+    """Constant steps du (k_u = 0); Newton failures halve a step (down to du/1024)."""
+    return ngtmc.AdaptiveStepControl(du_max=p["du"], k_u=0.0, du_min=p["du"] / 1024)
 
 
 def newton_options() -> ngtmc.NewtonOptions:
@@ -223,6 +223,7 @@ class DesignProblem:
         self.objective = sens.ExternalWork()
         self._cache = {}
         self.evaluations = []
+        self.failure = None
 
     def rho(self, x):
         rho = np.where(self.mask, 0.0, 1.0)
@@ -242,7 +243,12 @@ class DesignProblem:
             return self._cache[key]
         t0 = time.perf_counter()
         scene = build_scene(self.p, mesh=self.mesh, rho=self.rho(x))
-        path = sens.record_path(scene, schedule(self.p), control(self.p), newton=newton_options())
+        try:
+            path = sens.record_path(scene, schedule(self.p), control(self.p), newton=newton_options())
+        except ngtmc.StepFailure as e:
+            if not self.evaluations:
+                raise
+            raise _ForwardFailed(f"forward run of a trial design failed: {e}") from e
         g = sens.gradient(path, self.objective, wrt=("rho",))
         dWdx = self.filter.T @ g["rho"][self.mask]
         out = (g["value"], dWdx, path)
@@ -252,8 +258,14 @@ class DesignProblem:
         return out
 
 
+class _ForwardFailed(Exception):
+    pass
+
+
 def optimise(p: dict, iterations: int | None = None, callback=None):
-    """Run SLSQP; returns (problem, list of iteration dicts with x, W, volume, path)."""
+    """Run SLSQP; returns (problem, list of iteration dicts with x, W, volume, path). If the forward
+    run of a trial design fails (Newton at the minimum step), the optimisation stops there and the
+    iterations so far are returned (the failure is recorded in ``problem.failure``)."""
     from scipy.optimize import minimize
 
     prob = DesignProblem(p)
@@ -276,8 +288,11 @@ def optimise(p: dict, iterations: int | None = None, callback=None):
 
     vg = prob.volume_gradient()
     cons = [{"type": "ineq", "fun": lambda x: p["volume_fraction"] - prob.volume(x), "jac": lambda x: -vg}]
-    minimize(fun, x0, jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * n, constraints=cons, callback=cb,
-             options={"maxiter": int(iterations or p["iterations"]), "ftol": 1e-6})
+    try:
+        minimize(fun, x0, jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * n, constraints=cons, callback=cb,
+                 options={"maxiter": int(iterations or p["iterations"]), "ftol": 1e-6})
+    except _ForwardFailed as e:
+        prob.failure = str(e)
     return prob, log
 
 
@@ -403,7 +418,7 @@ def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = 
             "final": runner.case_results(_history_rows("final", last["path"])),
             "optimisation": {"W_initial": first["W"], "W_final": last["W"],
                              "improvement": last["W"] / first["W"] - 1.0, "iterations": len(log) - 1,
-                             "evaluations": len(prob.evaluations),
+                             "evaluations": len(prob.evaluations), "stopped_by_failure": prob.failure,
                              "mean_forward_time_s": float(ev["forward_time"].mean()),
                              "mean_gradient_time_s": float(ev["gradient_time"].mean())},
         },
