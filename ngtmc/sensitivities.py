@@ -1,7 +1,9 @@
 """Exact gradients of a recorded load path: the discrete adjoint of the single-pass staggered scheme.
 
-    path = record_path(scene, Schedule([0, 0.2]), AdaptiveStepControl(du_max=0.0125))
+    path = record_path(scene, Schedule([0, 0.2]), AdaptiveStepControl(du_max=0.0125),
+                       newton=NewtonOptions(rtol=1e-12))
     g = gradient(path, ExternalWork(), wrt=("rho", "E", "Gc", "l0", "gamma0"))
+    # or in one call: g, path = differentiate(scene, Schedule([0, 0.2]), ExternalWork(), control)
     g["value"]        # J, in the objective's unit (N mm for ExternalWork)
     g["rho"]          # dJ/drho, one entry per element (numpy array, J-unit per unit density)
     g["E"]            # dJ/dE, J-unit per MPa
@@ -56,7 +58,7 @@ from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, Schedule
 
 __all__ = [
-    "Path", "record_path", "replay", "gradient", "evaluate", "parameter_value", "design_mask",
+    "Path", "record_path", "replay", "gradient", "differentiate", "evaluate", "parameter_value", "design_mask",
     "Objective", "ReactionAtStep", "ExternalWork", "FinalFractureEnergy", "ComplianceAtStep",
     "UserObjective", "ForceCurveObjective", "directional_fd", "taylor_test",
 ]
@@ -839,6 +841,16 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
     out["time"] = time.perf_counter() - t0
     out["forward_time"] = path.forward_time
     return out
+
+
+def differentiate(scene: Scene, schedule: Schedule | float, objective: Objective,
+                  control: AdaptiveStepControl | None = None,
+                  wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0"), **options) -> tuple[dict, Path]:
+    """One call: run ``scene`` through ``schedule`` (:func:`record_path`, ``options`` as there) and
+    return (``gradient(path, objective, wrt)``, path). Newton defaults to ``rtol=1e-12`` here."""
+    options.setdefault("newton", NewtonOptions(rtol=1e-12))
+    path = record_path(scene, schedule, control, **options)
+    return gradient(path, objective, wrt), path
 
 
 # ====================================================================== checks
