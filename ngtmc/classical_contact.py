@@ -83,12 +83,21 @@ class PenaltyContact:
         Largest distance, mm, at which a minion point is paired with a master point. Must exceed
         the initial gap so that the contact is found before it closes.
     max_iterations, rtol : Newton limits (relative residual tolerance against the reaction scale).
+    inverse : str
+        Direct solver for the tangent: "sparsecholesky" (default; the tangent is the Hessian of an
+        energy, hence symmetric) or "umfpack".
+    regions : str, optional
+        Regex of the regions that are solved (default: all). With it, the mesh of a third-medium
+        scene can be reused with its void left out, so that reference and TMC solution share the
+        discretisation of the bodies exactly; the contact boundaries are then interfaces with the
+        (ignored) void, and the sign of the master normal is checked on the undeformed state.
     """
 
     def __init__(self, mesh: ngs.Mesh, materials: Mapping[str, Material], supports: Sequence[Support],
                  load: DisplacementLoad, master: str, minion: str, penalty: float, order: int = 2,
                  thickness: float = 1.0, intorder: int = 6, maxdist: float = 1.0,
-                 max_iterations: int = 30, rtol: float = 1e-9):
+                 max_iterations: int = 30, rtol: float = 1e-9, regions: str | None = None,
+                 inverse: str = "sparsecholesky"):
         if not (math.isfinite(penalty) and penalty > 0):
             raise ValueError(f"penalty = {penalty!r} N/mm^3 is outside the allowed range: finite and > 0")
         for b in (master, minion, load.boundary, *[s.boundary for s in supports]):
@@ -104,6 +113,7 @@ class PenaltyContact:
         self.max_iterations = int(max_iterations)
         self.rtol = float(rtol)
         self.load_bc = load
+        self.inverse = inverse
 
         dirichlet = [[] for _ in range(d)]
         for s in supports:
@@ -115,6 +125,8 @@ class PenaltyContact:
                 if c != load.component:
                     dirichlet[c].append(load.boundary)
         kw = {key: "|".join(dirichlet[c]) for c, key in zip(range(d), ("dirichletx", "dirichlety", "dirichletz")) if dirichlet[c]}
+        if regions is not None:
+            kw["definedon"] = mesh.Materials(regions)
         self.fes = ngs.VectorH1(mesh, order=order, **kw)
         self.u = ngs.GridFunction(self.fes, name="displacement")
         self._free = np.array(list(self.fes.FreeDofs()), dtype=bool)
@@ -124,7 +136,8 @@ class PenaltyContact:
         self._e = e.vec.FV().NumPy().copy()
         self.load = 0.0
 
-        regions = mesh.GetMaterials()
+        all_regions = mesh.GetMaterials()
+        regions_used = [r for r in all_regions if regions is None or re.fullmatch(regions, r)]
 
         def mat(r):
             for k, m in materials.items():
@@ -132,18 +145,26 @@ class PenaltyContact:
                     return m
             raise ValueError(f"region {r!r} has no material")
 
-        self.E_max = max(mat(r).E for r in regions)
-        K0 = mesh.MaterialCF({r: mat(r).K0 for r in regions})
-        G0 = mesh.MaterialCF({r: mat(r).G0 for r in regions})
+        self.E_max = max(mat(r).E for r in regions_used)
+        K0 = mesh.MaterialCF({r: mat(r).K0 for r in regions_used}, default=0)
+        G0 = mesh.MaterialCF({r: mat(r).G0 for r in regions_used}, default=0)
+        dxr = ngs.dx(definedon=mesh.Materials("|".join(regions_used)))
 
         ut = self.fes.TrialFunction()
         F = deformation_gradient(ut)
         self.a = ngs.BilinearForm(self.fes, symmetric=False)
-        self.a += ngs.Variation(psi_vol(F, K0).Compile() * ngs.dx)
-        self.a += ngs.Variation(psi_dev(F, G0).Compile() * ngs.dx)
-        self.cb = ngs.ContactBoundary(mesh.Boundaries(master), mesh.Boundaries(minion))
+        self.a += ngs.Variation(psi_vol(F, K0).Compile() * dxr)
+        self.a += ngs.Variation(psi_dev(F, G0).Compile() * dxr)
         X = ngs.CF((ngs.x, ngs.y) if d == 2 else (ngs.x, ngs.y, ngs.z))
-        pen = (X + ut - (X.Other() + ut.Other())) * self.cb.normal
+        # orientation of the master normal: the signed distance must be negative (open) at u = 0
+        probe = ngs.BilinearForm(self.fes)
+        cb0 = ngs.ContactBoundary(mesh.Boundaries(master), mesh.Boundaries(minion))
+        cb0.AddEnergy((X + ut - (X.Other() + ut.Other())) * cb0.normal)
+        cb0.Update(self.u, probe, intorder, maxdist)
+        self.normal_sign = -1.0 if probe.Energy(self.u.vec) > 0 else 1.0
+        self._cb_probe = (cb0, probe)  # kept alive: ContactBoundary must outlive its forms
+        self.cb = ngs.ContactBoundary(mesh.Boundaries(master), mesh.Boundaries(minion))
+        pen = self.normal_sign * (X + ut - (X.Other() + ut.Other())) * self.cb.normal
         self.cb.AddEnergy(ngs.IfPos(pen, self.penalty / 2 * pen * pen, 0))
         self._r = self.u.vec.CreateVector()
         self._du = self.u.vec.CreateVector()
@@ -198,7 +219,7 @@ class PenaltyContact:
             if it == self.max_iterations:
                 break
             self.a.AssembleLinearization(u)
-            inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse="umfpack")
+            inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=self.inverse)
             w = u.CreateVector()
             w.FV().NumPy()[:] = rem
             tmp = u.CreateVector()
