@@ -40,9 +40,17 @@ runner's ``cases(p)`` interface describes one forward load path per case and doe
 optimisation loop, so ``cases(p)`` only returns the initial design (the runner can still run it as
 a plain study); the optimisation is ``run``.
 
-Expected result: W grows by tens of per cent within a few iterations; the filler moves away from the
-middle of the pad toward its ends, so the beam carries load from the start but the notched section
-is loaded less hard and the crack starts later.
+Result (quick: 561 elements, 93 pad elements, steps of 0.02 mm; medium: 985 elements, 94 pad
+elements, steps of 0.01 mm). Starting from a uniform filler density 0.0025 (half the volume bound;
+contact still closes over most of the pad), W rose from 0.621 to 0.730 N mm (+17.7 %, 6 iterations,
+3 rejected trials) at quick and from 0.508 to 0.615 N mm (+21 %, 15 iterations, 8 rejected trials;
+the last 8 iterations add < 0.3 %) at medium. The optimiser takes the filler away from the middle
+of the pad, above the notch, and piles it up at the ends of the pad (densities up to 0.03): the
+indenter then loads the beam off-centre from the start, the bending moment at the notch is smaller
+for the same force, and the beam carries more (peak 4.97 against 4.36 N/mm at medium) before the
+crack runs. The left end (over the pinned support) gets more filler than the right one: the
+problem is nearly symmetric and the supports break the tie. One iteration costs one forward run and
+one adjoint sweep (medium: 16.7 s and 7.5 s on average on a shared 2-core machine).
 """
 from __future__ import annotations
 
