@@ -24,7 +24,9 @@ u_n enters, through the implicit function theorem). :func:`replay` re-runs exact
 sequence without adaptivity, which is what a finite-difference check must compare against.
 
 **Memory:** every accepted state is stored (u_n, alpha_n, H_n as float64 arrays):
-``Path.memory_bytes`` = 8 (N + 1) (ndof_u + ndof_alpha + n_history_points) bytes. The reverse sweep
+``Path.memory_bytes`` = 8 (N + 1) (ndof_u + ndof_alpha + n_history_points) bytes, or with
+``record_path(..., checkpoint_every=k)`` only every k-th state (the others are recomputed segment by
+segment during the sweep, for one extra forward run; see :class:`Path`). The reverse sweep
 re-assembles the tangent K_n and the phase-field matrix A_n from the stored states (one assembly
 and one factorization of each per step) instead of storing factorizations.
 

@@ -192,6 +192,7 @@ def test_cost_and_memory(path):
     t0 = time.perf_counter()
     g = S.gradient(r, S.ExternalWork(), wrt=("rho", "E", "Gc", "l0", "gamma0"))
     tg = time.perf_counter() - t0
+    assert abs(g["time"] - tg) < 0.1 * tg + 0.05
     s = path.solver
     per_step = 8 * (s.fes_u.ndof + s.fes_a.ndof + s.irs.ndof)
     print(f"\ncost: forward (record, adaptive) {path.forward_time:.2f} s, replay {r.forward_time:.2f} s, "
