@@ -1,0 +1,291 @@
+"""L-shaped panel, load - unload - reload through an indenter: irreversibility of the crack.
+
+What this study shows
+---------------------
+The second validation of Ciceri et al. (2026), Sect. "L-shaped panel irreversibility": the
+Winkler (2001) L-shaped concrete panel is loaded upward near the end of its horizontal arm by a
+solid semicircular indenter that starts 6 mm (l_h) below it, across a third-medium void. The
+imposed indenter displacement goes 0 -> 6.3 -> 6 -> 7 mm (load past the peak, unload back to the
+contact point, reload). A crack starts at the re-entrant corner. What must be seen:
+
+1. while the indenter crosses the gap the force stays small (the void, gamma0 = 1e-6, only
+   stiffens as it is squeezed);
+2. first loading: the panel is loaded through the squeezed void, a crack starts at the corner and
+   the force peaks;
+3. unloading to u = l_h: **no crack growth** (max alpha and W_f constant: the history variable
+   H_n = max(H_{n-1}, Psi_plus) keeps alpha from healing and unloading does not raise Psi_plus), and
+   the force returns to its first-loading value at u = l_h (about zero);
+4. reloading: softer (the crack is there), up to a **lower peak**, 7.6 kN in the paper.
+
+Geometry (mm; the paper's Fig. 12 is not available, sizes it does not give are our choices)
+-------------------------------------------------------------------------------------------
+* panel: 500 x 500 square without the lower-right 250 x 250 quadrant (Winkler); the bottom edge
+  of the vertical leg (y = 0, x in [0, 250]) is clamped (x and y). Plane strain, thickness 100 mm
+  (the Winkler specimen's), so forces are for the whole panel, in N: directly comparable with the
+  paper's 7.6 kN and with the Winkler band (kN, whole specimen);
+* fracture is modelled in the whole panel except a strip ``clamp_strip`` = 25 mm high along the
+  clamped edge (paper: "we restrict fracture in the indenter and near the fixed edge"), except
+  the indenter, and **except the contact zone** x in [430, 500] x y in [250, 270] of the arm above
+  the indenter (our addition). Without that exclusion the contact pressure under the indenter
+  (Psi_dev drives AT-2 damage under compression with the J-split, see MODEL.md) crushed the arm
+  locally: in a quick run the force dropped from 17.8 kN to 2.4 kN at u = 6.296 mm with a crack
+  energy of only 2.9 N mm/mm (about 9 mm of crack), and every reloading punched through again
+  (5 kN peaks). Winkler loaded the arm through a steel plate, so the load introduction is not part
+  of the fracture problem. The void (rho = 0) has no phase field;
+* indenter: solid half disc, radius ``indenter_radius`` = 20 mm (our choice), flat side down,
+  centred under x = ``load_x`` = 470 mm (30 mm from the arm's right end, Winkler's load point),
+  its apex ``gap`` = 6 mm below the arm's lower face (y = 250). Same material as the panel, no
+  fracture. Its flat bottom edge is the loaded boundary: the upward displacement is imposed there,
+  the tangential one held (hold_tangential, a floating indenter in a soft void otherwise has a
+  near-singular rigid mode); the recorded force is the vertical reaction there;
+* void (rho = 0): the box x in [load_x - R - 10, 500], y from the indenter's flat edge to the arm's
+  lower face, minus the indenter. No regulariser (paper: "no regularisation energy is introduced
+  in the void domain"), so linear triangles (displacement order 1) throughout, as the paper;
+* mesh: refined band x in [150, 260] x y in [230, 320] (``h_band``) around the expected crack path
+  (from the corner at (250, 250) to the left and slightly up, Winkler's experiments and Ambati et
+  al. 2015), contact zone x in [430, 500] x y in [250, 270] in the arm (``h_contact``), void and
+  indenter ``h_void``, the rest ``h_far``.
+
+Parameters and sources
+----------------------
+Table 2 of the paper: E0 = 2.58e4 MPa, nu = 0.18, Gc = 8.93e-5 kN/mm = 0.0893 N/mm,
+gamma0 = 1e-6. l0 is not legible in the paper's text: l0 = 1.1875 mm (Ambati et al. 2015, who
+also used h = 0.5 mm in the cracking region, as the paper). Schedule 0 -> 6.3 -> 6 -> 7 mm,
+l_h = 6 mm, k_u = 50 (paper). **k_u is in 1/N with W_f per unit thickness** (N mm/mm), the
+convention of :class:`ngtmc.AdaptiveStepControl`: with the 100 mm thickness, W_f in the history
+(whole panel, N mm) is 100 times the W_f that enters Eq. 20. Residual stiffness 1e-6 (at least
+gamma0, MODEL.md).
+
+Resolutions change mesh and step sizes only: ``quick`` (CI: h_band = 2 mm, i.e. 1.7 l0 > l0/2,
+so the solver's ResolutionWarning is expected and accepted for speed: the crack is smeared over a
+few elements and the phase field overestimates the dissipated energy, by about 1 + h/(2 l0);
+and a step floor du_min = 5e-3 mm: with the paper's 1e-8 the running crack takes hundreds of
+steps of 1e-8 .. 1e-3 mm, more than 450 steps to reach 6.54 mm), ``medium`` (h_band = 1 mm,
+du_min = 1e-8), ``paper`` (h_band = 0.5 mm as the paper, du_max = 0.01 mm, du_min = 1e-8; long).
+
+Expected result
+---------------
+Force about zero until the void is squeezed near u = 6 mm; first peak, then at u = 6.3 mm the
+crack has started; unloading: alpha and W_f constant, force back to its first-loading value at
+u = 6 mm; reloading softer with a lower peak, 7.6 kN in the paper. Winkler's experimental band
+(peak 6.7 - 7.6 kN at 0.2 mm) is shown shifted by the gap. The measured values are in ``MEASURED``
+and the tests.
+"""
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+
+import ngtmc
+from ngtmc.study import Case
+
+NAME = "l_panel"
+TITLE = "L-shaped panel: load, unload, reload through an indenter"
+SUMMARY = (
+    "Winkler's L-shaped panel (500 x 500 mm without a 250 x 250 quadrant, 100 mm thick, Table 2 of "
+    "Ciceri et al. 2026) is pushed upward near the end of its arm by a semicircular indenter that starts "
+    "6 mm away across a third-medium void (gamma0 = 1e-6, no regulariser, linear triangles). Schedule "
+    "0 -> 6.3 -> 6 -> 7 mm: a crack starts at the re-entrant corner on first loading, does not grow while "
+    "unloading (irreversibility), and the reloading is softer with a lower peak (paper: 7.6 kN). The Winkler "
+    "experimental band is shown shifted by the gap."
+)
+
+PARAMETERS = {
+    "E": (2.58e4, "MPa", "Young's modulus E0 (Table 2)"),
+    "nu": (0.18, "-", "Poisson's ratio (Table 2)"),
+    "Gc": (0.0893, "N/mm", "critical energy release rate, 8.93e-5 kN/mm (Table 2)"),
+    "l0": (1.1875, "mm", "phase-field length scale (Ambati et al. 2015; not legible in the paper)"),
+    "gamma0": (1e-6, "-", "void stiffness ratio of Eq. 17 (Table 2)"),
+    "residual_stiffness": (1e-6, "-", "added to g(alpha); at least about gamma0 (MODEL.md)"),
+    "thickness": (100.0, "mm", "out-of-plane thickness: the Winkler panel (forces for the whole panel, N)"),
+    "gap": (6.0, "mm", "gap l_h between indenter apex and the arm's lower face (paper)"),
+    "schedule": ([0.0, 6.3, 6.0, 7.0], "mm", "imposed indenter displacement: load, unload to l_h, reload (paper)"),
+    "load_x": (470.0, "mm", "x of the indenter axis, 30 mm from the arm's right end (Winkler)"),
+    "indenter_radius": (20.0, "mm", "radius of the semicircular indenter (our choice)"),
+    "void_margin": (10.0, "mm", "void box extends this far left of the indenter (our choice)"),
+    "clamp_strip": (25.0, "mm", "height of the strip along the clamped edge without fracture (our choice)"),
+    "k_u": (50.0, "1/N", "step-size sensitivity of Eq. 20, W_f per unit thickness (paper: 50)"),
+    "staggered": ("single", "-", "staggered scheme: 'single' (paper) or 'converged'"),
+}
+
+RESOLUTIONS = {
+    "quick": {"h_band": 2.0, "h_contact": 2.5, "h_void": 2.5, "h_far": 25.0, "du_max": 0.05, "du_min": 0.005},
+    "medium": {"h_band": 1.0, "h_contact": 1.5, "h_void": 2.0, "h_far": 20.0, "du_max": 0.05, "du_min": 1e-8},
+    "paper": {"h_band": 0.5, "h_contact": 1.0, "h_void": 1.0, "h_far": 15.0, "du_max": 0.01, "du_min": 1e-8},
+}
+RESOLUTION_PARAMETERS = {
+    "h_band": ("mm", "element size in the refined band along the crack path"),
+    "h_contact": ("mm", "element size in the arm above the indenter"),
+    "h_void": ("mm", "element size in the void and the indenter"),
+    "h_far": ("mm", "element size elsewhere in the panel"),
+    "du_max": ("mm", "largest load increment (Eq. 20)"),
+    "du_min": ("mm", "floor of Eq. 20 and smallest increment on cut-back (paper, three-point bending: 1e-8)"),
+}
+DEFAULT_RESOLUTION = "quick"
+
+SNAPSHOT_LOADS = [5.9, 6.1, 6.2, 6.3, 6.3 + 0.15, 6.3 + 0.3, 7.6 - 0.6, 7.6 - 0.4, 7.6 - 0.2, 7.6]
+# snapshot loads are pseudo-times? No: the runner compares with the applied load; see _snapshot_loads
+
+#: Measured values per resolution (filled in from runs; see the tests and the final report).
+MEASURED = {}
+
+REGIONS = "band|contact_zone|clamp_strip|panel|indenter|void"
+FRACTURE_REGIONS = ["band", "panel"]
+
+
+def build_mesh(p: dict):
+    """Mesh with regions ``band``, ``contact_zone``, ``panel``, ``clamp_strip`` (the panel),
+    ``indenter`` and ``void``; boundaries ``clamp`` (y = 0) and ``load`` (indenter's flat edge)."""
+    from netgen.occ import Circle, Glue, MoveTo, OCCGeometry, Pnt, Y
+    import ngsolve as ngs
+
+    gap, R, xl = float(p["gap"]), float(p["indenter_radius"]), float(p["load_x"])
+    margin, cs = float(p["void_margin"]), float(p["clamp_strip"])
+    if not (xl + R < 500 and xl - R - margin > 250):
+        raise ValueError("l_panel geometry: the indenter and its void must fit under the arm (250 < x < 500)")
+    outer = MoveTo(0, 0).LineTo(250, 0).LineTo(250, 250).LineTo(500, 250).LineTo(500, 500).LineTo(0, 500).Close().Face()
+    band = MoveTo(150, 230).Rectangle(110, 90).Face() * outer
+    cz = MoveTo(xl - 40, 250).Rectangle(500 - (xl - 40), 20).Face()
+    cstrip = MoveTo(0, 0).Rectangle(250, cs).Face()
+    rest = outer - band - cz - cstrip
+    band.faces.name = "band"
+    band.faces.maxh = float(p["h_band"])
+    cz.faces.name = "contact_zone"
+    cz.faces.maxh = float(p["h_contact"])
+    cstrip.faces.name = "clamp_strip"
+    rest.faces.name = "panel"
+    cstrip.edges.Min(Y).name = "clamp"
+    yb = 250 - gap - R
+    half = Circle(Pnt(xl, yb), R).Face() * MoveTo(xl - R - 1, yb).Rectangle(2 * R + 2, R + 1).Face()
+    half.faces.name = "indenter"
+    half.faces.maxh = float(p["h_void"])
+    half.edges.Min(Y).name = "load"
+    void = MoveTo(xl - R - margin, yb).Rectangle(500 - (xl - R - margin), 250 - yb).Face() - half
+    void.faces.name = "void"
+    void.faces.maxh = float(p["h_void"])
+    shape = Glue([band, cz, cstrip, rest, half, void])
+    return ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=float(p["h_far"])))
+
+
+def build_scene(p: dict) -> ngtmc.Scene:
+    mat = ngtmc.Material(E=float(p["E"]), nu=float(p["nu"]), Gc=float(p["Gc"]), l0=float(p["l0"]))
+    return ngtmc.Scene(
+        mesh=build_mesh(p),
+        materials={REGIONS: mat},
+        supports=[ngtmc.Support("clamp", x=True, y=True)],
+        load=ngtmc.DisplacementLoad("load", direction="y", hold_tangential=True),
+        density={"void": 0.0},
+        fracture_regions=FRACTURE_REGIONS,
+        regulariser=None,
+        gamma0=float(p["gamma0"]),
+        residual_stiffness=float(p["residual_stiffness"]),
+        thickness=float(p["thickness"]),
+        order=1,
+        name="l_panel",
+    )
+
+
+def cases(p: dict) -> list[Case]:
+    du_max = float(p["du_max"])
+    sched = ngtmc.Schedule([float(x) for x in p["schedule"]])
+    return [Case(
+        name="main", label=f"this model (k_u = {float(p['k_u']):g} 1/N, du_max = {du_max:g} mm)",
+        scene=partial(build_scene, dict(p)),
+        schedule=sched,
+        control=ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=min(float(p["du_min"]), du_max)),
+        options={"staggered": p.get("staggered", "single")},
+        snapshot_loads=[5.9, 6.1, 6.2, 6.3, 7.0],
+        parameters={"k_u": float(p["k_u"]), "du_max": du_max},
+    )]
+
+
+def _data_path(name):
+    from importlib.resources import files
+    return files("ngtmc.data").joinpath(name)
+
+
+WINKLER_BAND_SOURCE = ("Winkler L-shaped panel experiments, scatter band (Winkler et al. 2004 IJNAMG Fig. 10 and "
+                       "Winkler et al. 2001 Fig. 5), digitised; file from github fpled/MYCODE, examples/phasefield/"
+                       "dataLshapedPanelWinkler/force_displacement_Win04_fig10_Win01_fig5.csv @ 626a87f0")
+WINKLER_A_SOURCE = ("Winkler PhD thesis (2001), Abb. 7.12, test series A; file from github PSAAPGroupLinder/"
+                    "lShapedPanelBenchmark, experimental/Winkler_Abb-7.12_Versuchsreihe-A.csv @ 70a51eeb")
+
+
+def references(p: dict) -> list[dict]:
+    """Winkler band and series A (whole 100 mm panel, N), shifted by the gap, scaled to the scene
+    thickness (thickness / 100 mm)."""
+    import pandas as pd
+    gap = float(p["gap"])
+    scale = float(p["thickness"]) / 100.0
+    band = pd.read_csv(_data_path("lshape_winkler_experiment_envelope_kN_mm.csv"))
+    a = pd.read_csv(_data_path("lshape_winkler_experiment_seriesA_N_mm.csv"))
+    unit = "N" if scale == 1.0 else f"N per {float(p['thickness']):g} mm"
+    return [
+        {"label": "Winkler experiments, scatter band (shifted by the gap)", "source": WINKLER_BAND_SOURCE,
+         "kind": "band", "x": (band["U_mm"] + gap).tolist(), "y_lower": (1000 * scale * band["F_lb_kN"]).tolist(),
+         "y_upper": (1000 * scale * band["F_ub_kN"]).tolist(), "x_unit": "mm", "y_unit": unit},
+        {"label": "Winkler series A (shifted by the gap)", "source": WINKLER_A_SOURCE, "kind": "curve",
+         "x": (a["#x"] + gap).tolist(), "y": (scale * a["Winkel-A"]).tolist(), "x_unit": "mm", "y_unit": unit},
+    ]
+
+
+def targets(p: dict) -> list[dict]:
+    scale = float(p["thickness"]) / 100.0
+    return [{"case": "main", "quantity": "reload_peak_force", "value": 7600.0 * scale, "unit": "N",
+             "source": "Ciceri et al. 2026, L-panel text: reload peak 7.6 kN (whole 100 mm panel)", "tolerance": 0.15}]
+
+
+# ---------------------------------------------------------------------- post-processing
+def phases(hist, p: dict, settle: float = 0.1) -> dict:
+    """Split a history (DataFrame of one case) into the schedule's phases and return the key numbers.
+
+    first_peak_force / first_peak_load: largest force while loading to 6.3 mm (at the turning point
+    if the peak was not reached); force_first_loading_at_gap: force at u = l_h on the first loading
+    (interpolated); force_unloaded_at_gap: force at the end of unloading (u = l_h);
+    reload_peak_force / reload_peak_load: largest force while reloading to 7 mm.
+
+    Damage while unloading: the single-pass staggered scheme lags damage by one step, and the step
+    rule (Eq. 20) makes the first unloading steps tiny when W_f grew fast just before the turning
+    point, so the damage driven by the last loading states is still being applied in the first
+    unloading steps, at loads within a few hundredths of a mm of the turning point.
+    ``unload_wf_change`` and ``unload_max_alpha_change`` are therefore measured over the unloading
+    steps after the first ``settle`` fraction of the unloading path (default 10 %, 0.03 mm);
+    ``unload_wf_lag`` is the growth of W_f before that (from the turning point).
+    """
+    sched = [float(x) for x in p["schedule"]]
+    u1, u2, u3 = sched[1], sched[2], sched[3]
+    h = hist.sort_values("step").reset_index(drop=True)
+    load = h["load"].to_numpy()
+    idx = np.arange(len(load))
+    i1 = int(np.argmax(np.isclose(load, u1, atol=1e-9)))
+    rest = np.where(np.isclose(load, u2, atol=1e-9) & (idx > i1))[0]
+    i2 = int(rest[0]) if rest.size else len(load) - 1
+    first = h.iloc[: i1 + 1]
+    unload = h.iloc[i1: i2 + 1]
+    reload = h.iloc[i2:]
+    j = int(first["force"].to_numpy().argmax())
+    gap = float(p["gap"])
+    u_settle = u1 - settle * abs(u1 - u2)
+    settled = unload[unload["load"] <= u_settle + 1e-12]
+    out = {
+        "first_peak_force": float(first["force"].iloc[j]), "first_peak_load": float(first["load"].iloc[j]),
+        "first_peak_before_turning_point": bool(j < len(first) - 1 and first["force"].iloc[-1] < first["force"].iloc[j]),
+        "force_at_turning_point": float(first["force"].iloc[-1]),
+        "force_first_loading_at_gap": float(np.interp(gap, first["load"], first["force"])),
+        "force_unloaded_at_gap": float(unload["force"].iloc[-1]),
+        "unload_steps": int(len(unload) - 1),
+        "wf_at_turning_point": float(unload["fracture_energy"].iloc[0]),
+        "max_alpha_at_turning_point": float(unload["max_alpha"].iloc[0]),
+        "unload_wf_lag": float(settled["fracture_energy"].iloc[0] - unload["fracture_energy"].iloc[0]) if len(settled) else float("nan"),
+        "unload_wf_change": float(settled["fracture_energy"].iloc[-1] - settled["fracture_energy"].iloc[0]) if len(settled) else float("nan"),
+        "unload_max_alpha_change": float(settled["max_alpha"].iloc[-1] - settled["max_alpha"].iloc[0]) if len(settled) else float("nan"),
+        "unload_settled_steps": int(len(settled)),
+        "completed": bool(np.isclose(load[-1], u3)),
+    }
+    if len(reload) > 1:
+        k = int(reload["force"].to_numpy().argmax())
+        out.update({"reload_peak_force": float(reload["force"].iloc[k]), "reload_peak_load": float(reload["load"].iloc[k]),
+                    "final_force": float(reload["force"].iloc[-1]),
+                    "wf_final": float(reload["fracture_energy"].iloc[-1])})
+    return out

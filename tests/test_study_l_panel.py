@@ -1,0 +1,112 @@
+"""CI test of the l_panel study at ``quick`` resolution (load 0 -> 6.3 -> 6 -> 7 mm).
+
+Thickness convention: ``Scene(thickness=100)``, the Winkler panel's, so every force is for the
+whole panel in N and compares directly with the paper's 7.6 kN = 7600 N. k_u = 50 is in 1/N with
+W_f per unit thickness (the history's fracture_energy is for the whole panel, 100 times that).
+
+Measured at quick (8516 elements, h_band = 2 mm = 1.7 l0; see MEASURED): the first loading does
+not reach its peak before the turning point (17.9 kN at 6.3 mm, diffuse damage, max alpha 0.40);
+the crack runs on reloading, at 22.1 kN (6.378 mm). The published reload peak (7.6 kN) and the
+"lower peak on reloading" are not met at this resolution: the coarse band overestimates the
+nucleation load at the re-entrant corner. Those two checks are strict xfails with the measured
+values; the irreversibility checks (what the study is about) pass.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ngtmc.study import load_study, study_parameters
+
+S = load_study("l_panel")
+
+#: quick resolution, measured with this test's run (forces for the whole 100 mm panel, N)
+MEASURED = {
+    "first_peak_force": 17935.0, "first_peak_load": 6.3, "force_first_loading_at_gap": 4765.0,
+    "force_unloaded_at_gap": 4484.0, "reload_peak_force": 22070.0, "reload_peak_load": 6.378,
+}
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    from ngtmc.runner import run_study
+
+    out = run_study("l_panel", resolution="quick", output=tmp_path_factory.mktemp("lp") / "run",
+                    report=False, vtk=False, progress=False)
+    hist = pd.read_csv(out / "history.csv")
+    _, p = study_parameters(S, "quick")
+    h = hist[hist["case"] == "main"].sort_values("step").reset_index(drop=True)
+    return p, h, S.phases(h, p)
+
+
+def test_schedule_completed(run):
+    p, h, ph = run
+    assert ph["completed"]
+    assert ph["unload_settled_steps"] >= 3
+
+
+def test_no_damage_growth_while_unloading(run):
+    p, h, ph = run
+    # after the first 10 % of the unloading path (the single-pass scheme's lag, see phases())
+    assert abs(ph["unload_max_alpha_change"]) <= 1e-9
+    assert abs(ph["unload_wf_change"]) <= 1e-9 * ph["wf_at_turning_point"]
+    # the lag itself is a small part of the damage at the turning point (measured 8.5 % at quick)
+    assert ph["unload_wf_lag"] <= 0.15 * ph["wf_at_turning_point"]
+
+
+def test_damage_is_irreversible(run):
+    p, h, ph = run
+    wf = h["fracture_energy"].to_numpy()
+    ma = h["max_alpha"].to_numpy()
+    assert (np.diff(wf) >= -1e-9 * wf.max()).all()
+    assert (np.diff(ma) >= -1e-12).all()
+
+
+def test_reload_retraces_unloading_branch(run):
+    """Damage is frozen between 6 and 6.3 mm: reloading follows the unloading curve."""
+    p, h, ph = run
+    u1, u2 = p["schedule"][1], p["schedule"][2]
+    load = h["load"].to_numpy()
+    i1 = int(np.argmax(np.isclose(load, u1)))
+    i2 = i1 + int(np.argmax(np.isclose(load[i1:], u2)))
+    un = h.iloc[i1: i2 + 1]
+    re = h.iloc[i2:]
+    re = re[re["load"] <= u1 + 1e-12]
+    un = un[un["load"] <= u1 - 0.1 * (u1 - u2)]
+    f_un = np.interp(re["load"], un["load"][::-1], un["force"][::-1])
+    sel = (re["load"] >= un["load"].min()) & (re["load"] <= un["load"].max())
+    assert sel.sum() >= 3
+    assert np.allclose(re["force"][sel], f_un[sel], rtol=0.02)
+
+
+def test_force_returns_to_first_loading_value_at_gap(run):
+    """At u = l_h the unloaded force equals the first-loading force there, within the stiffness lost
+    to the (diffuse) damage. Not "about zero" as in the paper: the third medium already carries
+    4.8 kN at u = l_h on first loading (the void between the curved indenter and the arm is squeezed
+    over about 20 mm; effective contact begins near 5.8 mm)."""
+    p, h, ph = run
+    assert ph["force_unloaded_at_gap"] == pytest.approx(ph["force_first_loading_at_gap"], rel=0.10)
+    assert ph["force_unloaded_at_gap"] <= ph["force_first_loading_at_gap"] * (1 + 1e-6)
+
+
+@pytest.mark.xfail(strict=True, reason="quick (h_band = 1.7 l0): the first loading ends at 6.3 mm before its "
+                   "peak (17.9 kN); the crack runs on reloading at 22.1 kN, so the reload peak is higher")
+def test_reload_peak_lower_than_first_peak(run):
+    p, h, ph = run
+    assert ph["reload_peak_force"] < ph["first_peak_force"]
+
+
+@pytest.mark.xfail(strict=True, reason="quick: reload peak measured 22.1 kN against the paper's 7.6 kN "
+                   "(+190 %); the coarse band overestimates the nucleation load at the corner")
+def test_reload_peak_matches_paper(run):
+    p, h, ph = run
+    t = S.targets(p)[0]
+    assert ph["reload_peak_force"] == pytest.approx(t["value"], rel=t["tolerance"])
+
+
+def test_quick_values_as_measured(run):
+    """Regression guard on the honest quick values (5 %)."""
+    p, h, ph = run
+    for k in ("first_peak_force", "reload_peak_force", "force_first_loading_at_gap"):
+        assert ph[k] == pytest.approx(MEASURED[k], rel=0.05), k
