@@ -29,3 +29,8 @@ from .study import Case, list_studies, load_study  # noqa: E402
 from .runner import run_study  # noqa: E402
 
 __all__ += ["Case", "list_studies", "load_study", "run_study"]
+
+from . import sensitivities  # noqa: E402
+from .sensitivities import differentiate, gradient, record_path  # noqa: E402
+
+__all__ += ["sensitivities", "differentiate", "gradient", "record_path"]
