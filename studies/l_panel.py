@@ -63,13 +63,37 @@ and a step floor du_min = 5e-3 mm: with the paper's 1e-8 the running crack takes
 steps of 1e-8 .. 1e-3 mm, more than 450 steps to reach 6.54 mm), ``medium`` (h_band = 1 mm,
 du_min = 1e-8), ``paper`` (h_band = 0.5 mm as the paper, du_max = 0.01 mm, du_min = 1e-8; long).
 
-Expected result
----------------
+Expected result (paper)
+-----------------------
 Force about zero until the void is squeezed near u = 6 mm; first peak, then at u = 6.3 mm the
 crack has started; unloading: alpha and W_f constant, force back to its first-loading value at
 u = 6 mm; reloading softer with a lower peak, 7.6 kN in the paper. Winkler's experimental band
-(peak 6.7 - 7.6 kN at 0.2 mm) is shown shifted by the gap. The measured values are in ``MEASURED``
-and the tests.
+(peak 6.7 - 7.6 kN at 0.2 mm) is shown shifted by the gap.
+
+Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
+----------------------------------------------------------------------
+* Irreversibility holds: once the load has dropped 0.075 mm below the turning point, W_f and max
+  alpha stay constant to the last digit until reloading passes 6.3 mm again, and the reloading
+  curve retraces the unloading one. Damage does grow in the first unloading steps (W_f +7.8 % at
+  quick, +21 % at medium, within 0.06 mm of the turning point): the single-pass scheme lags damage
+  by one step and the tiny first unloading steps (Eq. 20 after a fast W_f increase) still apply the
+  damage driven by the last loading states.
+* At u = l_h the force is 4.8 kN on first loading (not "about zero": the third medium between the
+  curved indenter and the arm is squeezed over some 20 mm and carries load from about 5.8 mm on;
+  approach-only runs gave F(6.0) = 5.4 kN with 2.5 mm void elements and 4.8 kN with 0.5 mm ones at
+  the apex), 4.5 kN after unloading (quick -5.9 %, medium -1.5 %): the same within the stiffness
+  lost to the damage.
+* Not reproduced: the panel is far stronger than in the paper. At 6.3 mm the first loading has not
+  peaked (17.9 kN quick, 18.2 kN medium, diffuse damage, max alpha 0.41 / 0.67); the crack runs
+  on reloading from 23.6 kN (quick, 6.46 mm) / at least 20.8 kN (medium, 6.35 mm, run stopped),
+  against 7.6 kN. The first loading agrees to 1.5 % between h_band = 2 and 1 mm, so the mesh is
+  not the cause; the paper-resolution run was not done. Candidates not checked: the AT-2 strength
+  of these parameters, 3 sqrt(3)/16 sqrt(E' Gc / l0) = 14.3 MPa, is five times concrete's; the
+  load introduction (a 20 mm indenter at x = 470 here; the usual benchmark imposes the
+  displacement on the 30 mm segment x in [470, 500]); details of the paper's set-up not in its
+  text. No parameter was tuned to the reference.
+* Without excluding the contact zone from fracture the arm was crushed under the indenter (see
+  the geometry section).
 """
 from __future__ import annotations
 
@@ -124,11 +148,23 @@ RESOLUTION_PARAMETERS = {
 }
 DEFAULT_RESOLUTION = "quick"
 
-SNAPSHOT_LOADS = [5.9, 6.1, 6.2, 6.3, 6.3 + 0.15, 6.3 + 0.3, 7.6 - 0.6, 7.6 - 0.4, 7.6 - 0.2, 7.6]
-# snapshot loads are pseudo-times? No: the runner compares with the applied load; see _snapshot_loads
-
-#: Measured values per resolution (filled in from runs; see the tests and the final report).
-MEASURED = {}
+#: Measured with ngtmc.run_study on a shared, heavily loaded 2-core machine (wall times inflated).
+#: Forces in N for the whole 100 mm panel; W_f (fracture_energy) in N mm for the whole panel.
+MEASURED = {
+    "quick": {"elements": 8516, "ndof_u": 8680, "ndof_alpha": 4340, "steps": 291, "newton_iterations": 660,
+              "cutbacks": 4, "wall_time_s": 552, "first_loading_force_at_6.3": 17936,
+              "force_first_loading_at_gap": 4765, "force_unloaded_at_gap": 4484, "wf_at_turning_point": 62.1,
+              "unload_wf_lag": 4.83, "unload_wf_change_after_settle": 0.0, "reload_peak_force": 23621,
+              "reload_peak_load": 6.46, "final_force": 8993},
+    "quick_with_du_min_1e-8": {"note": "stopped at 6.536 mm after 459 steps (crack tail)",
+                               "first_loading_force_at_6.3": 17935, "reload_peak_force": 22070,
+                               "reload_peak_load": 6.378},
+    "medium": {"elements": 27986, "ndof_u": 28204, "ndof_alpha": 14102, "note": "stopped at 6.351 mm on reloading (time)",
+               "steps": 179, "newton_iterations": 400, "wall_time_s": 1651, "first_loading_force_at_6.3": 18211,
+               "force_first_loading_at_gap": 4574, "force_unloaded_at_gap": 4505, "wf_at_turning_point": 82.5,
+               "unload_wf_lag": 17.5, "unload_wf_change_after_settle": 0.0, "reload_peak_force_at_least": 20843,
+               "reload_peak_load": 6.35},
+}
 
 REGIONS = "band|contact_zone|clamp_strip|panel|indenter|void"
 FRACTURE_REGIONS = ["band", "panel"]
@@ -237,7 +273,7 @@ def targets(p: dict) -> list[dict]:
 
 
 # ---------------------------------------------------------------------- post-processing
-def phases(hist, p: dict, settle: float = 0.1) -> dict:
+def phases(hist, p: dict, settle: float = 0.25) -> dict:
     """Split a history (DataFrame of one case) into the schedule's phases and return the key numbers.
 
     first_peak_force / first_peak_load: largest force while loading to 6.3 mm (at the turning point
@@ -250,7 +286,7 @@ def phases(hist, p: dict, settle: float = 0.1) -> dict:
     point, so the damage driven by the last loading states is still being applied in the first
     unloading steps, at loads within a few hundredths of a mm of the turning point.
     ``unload_wf_change`` and ``unload_max_alpha_change`` are therefore measured over the unloading
-    steps after the first ``settle`` fraction of the unloading path (default 10 %, 0.03 mm);
+    steps after the first ``settle`` fraction of the unloading path (default 25 %, 0.075 mm);
     ``unload_wf_lag`` is the growth of W_f before that (from the turning point).
     """
     sched = [float(x) for x in p["schedule"]]
