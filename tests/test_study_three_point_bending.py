@@ -1,8 +1,13 @@
 """studies/three_point_bending.py: the scene, the reference data, and the quick run against the
 published numbers (Ambati et al. 2015, Fig. 22, shifted by the 0.05 mm gap: 42 N/mm at 0.096 mm).
 
-The quick run is the CI run (``@pytest.mark.slow``: minutes). Measured values at every resolution
-are in the study module's ``MEASURED`` dict (and the final report of the change that added them).
+The quick run is the CI run (``@pytest.mark.slow``). It stops at ``stop_load`` = 0.1025 mm, just
+after the force has dropped to about a third of the peak: with k_u = 1000 the rest of the way to
+0.15 mm is a post-failure tail of several hundred tiny steps (W_f keeps growing, so Eq. 20 keeps
+the steps at 1e-6..1e-4 mm) that none of the checks below needs. The run is deterministic and the
+schedule only differs at its end, so the history up to 0.1025 mm is that of the full quick run
+(``ngtmc run three-point-bending``). Measured values at every resolution are in the study module's
+``MEASURED`` dict and docstring.
 """
 from __future__ import annotations
 
@@ -15,6 +20,8 @@ import pytest
 import ngtmc
 from ngtmc.study import load_study, study_parameters
 from studies import three_point_bending as tpb
+
+STOP = 0.1025  # mm, see the module docstring
 
 
 def test_module_interface():
@@ -74,7 +81,8 @@ def test_scene_geometry():
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("tpb") / "quick"
-    ngtmc.run_study("three_point_bending", resolution="quick", output=out, report=False, progress=False)
+    ngtmc.run_study("three_point_bending", resolution="quick", output=out, report=False, progress=False,
+                    overrides={"stop_load": STOP})
     meta = json.loads((out / "metadata.json").read_text())
     hist = pd.read_csv(out / "history.csv")
     return out, meta, hist
@@ -89,7 +97,7 @@ def test_quick_run_files_and_contact(quick_run):
                                                                    "force_before_contact")},
           meta["mesh"])
     assert meta["status"] == "completed"
-    assert h["load"].iloc[-1] == pytest.approx(0.15)
+    assert h["load"].iloc[-1] == pytest.approx(STOP)
     # about zero force until contact at the gap: up to 0.9 gap the void resists with < 2 % of the peak
     assert r["force_before_contact"] < 0.02 * r["peak_force"]
     # after contact the force rises; a crack runs (alpha = 1) and the force drops after the peak
@@ -97,7 +105,7 @@ def test_quick_run_files_and_contact(quick_run):
     assert h["force"].iloc[-1] < 0.5 * r["peak_force"]
     assert r["peak_load"] > 0.05
     z = np.load(out / "snapshots.npz")
-    assert z["main__u"].shape[0] == len(z["main__loads"]) >= len(tpb.SNAPSHOT_LOADS)
+    assert z["main__u"].shape[0] == len(z["main__loads"]) == len([x for x in tpb.SNAPSHOT_LOADS if x <= STOP]) + 1
     assert (out / "vtk" / "main.pvd").exists()
 
 
