@@ -49,7 +49,7 @@ case               steps  Newton  peak force [N/mm]   at [mm]
 =================  =====  ======  ==================  ==========================
 k_u=0,    du 4e-3     38     150  55.7                0.132 (beam not broken by 0.15 mm: 49 N/mm left)
 k_u=50,   du 4e-3     92     304  47.2                0.1116
-k_u=1000, du 4e-3   231+    600+  40.6                0.1012
+k_u=1000, du 4e-3   282+    700+  40.6                0.1012 (run stopped at 0.107 mm, 12 N/mm left)
 =================  =====  ======  ==================  ==========================
 
 The influence of k_u is large on this mesh: with constant steps of 4e-3 mm the single-pass
