@@ -62,7 +62,6 @@ penalty grows tenfold. Measured numbers: module constant ``MEASURED`` and the te
 from __future__ import annotations
 
 from functools import partial
-import math
 
 import numpy as np
 
@@ -203,12 +202,11 @@ def build_classical(p: dict, penalty_value: float | None = None):
 
 
 def run_classical(p: dict, case: Case, out_dir=None):
-    """``Case.run`` of the classical reference: a DataFrame with load, force, newton_iterations, ...
-    (the history columns that have no meaning here, such as max_alpha, are absent)."""
+    """``Case.run`` of the classical reference: a DataFrame with step, load, force, energy (elastic +
+    penalty, N mm), newton_iterations, cutbacks, step_size, wall_time (the history columns that have
+    no meaning here, such as max_alpha, are absent)."""
     ref = build_classical(p)
     hist = ref.run(ngtmc.Schedule.monotonic(float(p["final_load"])), du=float(p["du_max"]))
-    hist = hist.rename(columns={"energy": "elastic_energy"})
-    hist.attrs["ndof_u"] = ref.fes.ndof
     return hist
 
 
