@@ -2,8 +2,8 @@
 
     ngtmc list
     ngtmc run three-point-bending --resolution medium --set k_u=50 --set du_max=1e-3
-    ngtmc run three-point-bending --output runs/tpb --resume
-    ngtmc report runs/three_point_bending-quick
+    ngtmc run three-point-bending --output reports/tpb --resume
+    ngtmc report reports/three_point_bending-quick
     ngtmc report --index runs
 
 Exit status: 0 on success, 1 when a run failed (its history and metadata are written with status
@@ -40,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a named study into a run folder")
     r.add_argument("name", help="study name (dashes or underscores; see `ngtmc list`)")
     r.add_argument("--resolution", "-r", default=None, help="quick (default), medium, paper, ...")
-    r.add_argument("--output", "-o", default=None, help="run folder (default runs/<study>-<resolution>)")
+    r.add_argument("--output", "-o", default=None, help="run folder (default reports/<study>-<resolution>)")
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a parameter (repeatable), e.g. --set k_u=50 --set gamma0=1e-5")
     r.add_argument("--resume", action="store_true", help="continue an interrupted or failed run from its checkpoint")

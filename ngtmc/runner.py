@@ -194,8 +194,8 @@ def case_results(rows: pd.DataFrame) -> dict:
     return out
 
 
-def default_output(study: str, resolution: str, base: str | Path = "runs") -> Path:
-    """``runs/<study>-<resolution>``; if that folder holds a run already, a time-stamped sibling."""
+def default_output(study: str, resolution: str, base: str | Path = "reports") -> Path:
+    """``reports/<study>-<resolution>``; if that folder holds a run already, a time-stamped sibling."""
     d = Path(base) / f"{study}-{resolution}"
     if d.exists() and any(d.iterdir()):
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -207,7 +207,7 @@ def default_output(study: str, resolution: str, base: str | Path = "runs") -> Pa
     return d
 
 
-def _latest_run(study: str, resolution: str, base: str | Path = "runs") -> Path | None:
+def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Path | None:
     base = Path(base)
     if not base.is_dir():
         return None
@@ -684,8 +684,8 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     resolution : str, optional
         One of the study's RESOLUTIONS (default: its DEFAULT_RESOLUTION, normally ``"quick"``).
     output : path, optional
-        Run folder. Default ``runs/<study>-<resolution>`` (time-stamped if it exists already); with
-        ``resume=True`` and no output, the latest ``runs/<study>-<resolution>*`` with a checkpoint.
+        Run folder. Default ``reports/<study>-<resolution>`` (time-stamped if it exists already); with
+        ``resume=True`` and no output, the latest ``reports/<study>-<resolution>*`` with a checkpoint.
     overrides : dict, optional
         Any parameter of the study (PARAMETERS or resolution keys, e.g. ``{"k_u": 50, "du_max": 1e-3}``);
         strings are converted to the type of the default. Unknown keys raise StudyError.
@@ -713,7 +713,7 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         if resume:
             output = _latest_run(mod.NAME, res)
             if output is None:
-                raise StudyError(f"resume=True but no run folder runs/{mod.NAME}-{res}* with a checkpoint exists; "
+                raise StudyError(f"resume=True but no run folder reports/{mod.NAME}-{res}* with a checkpoint exists; "
                                  "give output=")
         else:
             output = default_output(mod.NAME, res)

@@ -70,5 +70,5 @@ def test_quick_run(quick_run):
         assert res[f"ku0_du{du}"]["steps"] < res[f"ku50_du{du}"]["steps"] < res[f"ku1000_du{du}"]["steps"]
         assert res[f"ku1000_du{du}"]["min_step_size"] < 0.1 * res[f"ku0_du{du}"]["min_step_size"]
     for name, r in res.items():
-        assert r["final_load"] == pytest.approx(0.15)
+        assert r["final_load"] == pytest.approx(sc.RESOLUTIONS["quick"]["stop_load"])
         assert np.isfinite(r["peak_force_error"]) and r["peak_load"] > 0.05
