@@ -75,7 +75,7 @@ PARAMETERS["k_u_values"] = ([0.0, 50.0, 1000.0], "1/N", "values of k_u in Eq. 20
 
 RESOLUTIONS = {
     "quick": {"h_band": 0.03, "h_void": 0.04, "h_indenter": 0.1, "h_beam": 0.3,
-              "du_max_coarse": 4e-3, "du_max_fine": 2e-3, "stop_load": 0.105},
+              "du_max_coarse": 4e-3, "du_max_fine": 4e-3, "stop_load": 0.105},
     "medium": {**{k: v for k, v in tpb.RESOLUTIONS["quick"].items() if k != "du_max"},
                "du_max_coarse": 2e-3, "du_max_fine": 0.5e-3, "stop_load": 0.15},
     "paper": {**{k: v for k, v in tpb.RESOLUTIONS["medium"].items() if k != "du_max"},

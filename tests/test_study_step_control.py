@@ -17,13 +17,16 @@ from studies import three_point_bending as tpb
 def test_cases_and_physics_shared_with_three_point_bending():
     assert load_study("step-control") is sc
     assert {"quick", "medium", "paper"} <= set(sc.RESOLUTIONS)
-    _, p = study_parameters(sc, "quick")
+    _, p = study_parameters(sc, "medium")
     cs = sc.cases(p)
     assert len(cs) == 6 and len({c.name for c in cs}) == 6
     kus = sorted({c.control.k_u for c in cs})
     assert kus == [0.0, 50.0, 1000.0]
-    assert sorted({c.control.du_max for c in cs}) == [2e-3, 4e-3]
-    assert sc.reference_case(p) == "ku1000_du2e-03"
+    assert sorted({c.control.du_max for c in cs}) == [0.5e-3, 2e-3]
+    assert sc.reference_case(p) == "ku1000_du5e-04"
+    _, p = study_parameters(sc, "quick")  # CI subset: one du_max
+    assert sorted((c.control.k_u, c.control.du_max) for c in sc.cases(p)) == [(0.0, 4e-3), (50.0, 4e-3), (1000.0, 4e-3)]
+    assert sc.reference_case(p) == "ku1000_du4e-03"
     # same physics as three_point_bending: every physical parameter but k_u is shared, same values
     for k, v in tpb.PARAMETERS.items():
         if k != "k_u":
@@ -35,7 +38,7 @@ def test_cases_and_physics_shared_with_three_point_bending():
 
 
 def test_post_results_errors_against_reference():
-    _, p = study_parameters(sc, "quick")
+    _, p = study_parameters(sc, "quick", {"du_max_fine": "2e-3"})
     res = {"ku1000_du2e-03": {"peak_force": 40.0, "peak_load": 0.1, "steps": 100, "wall_time_s": 100.0},
            "ku0_du4e-03": {"peak_force": 44.0, "peak_load": 0.11, "steps": 25, "wall_time_s": 20.0}}
     out = sc.post_results(p, pd.DataFrame(), res)
@@ -61,11 +64,14 @@ def test_quick_run(quick_run):
         print(f"  {name:16s} steps {r['steps']:4d}  Newton {r['newton_iterations']:5d}  "
               f"wall {r['wall_time_s']:7.1f} s  peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.4f} mm  "
               f"error {100 * r['peak_force_error']:+.2f} %")
-    assert meta["status"] == "completed" and len(res) == 6
+    # quick (CI): k_u in {0, 50, 1000} at one du_max; medium and paper add a second du_max
+    _, p = study_parameters(sc, "quick")
+    kus, dus = sc._grid(p)
+    assert meta["status"] == "completed" and len(res) == len(kus) * len(dus) == 3
     assert sorted(h["case"].unique()) == sorted(res)
-    ref = res["ku1000_du2e-03"]
+    ref = res[sc.reference_case(p)]
     assert ref["peak_force_error"] == 0.0
-    for du in ("4e-03", "2e-03"):
+    for du in {f"{d:.0e}" for d in dus}:
         # k_u shrinks the steps while the crack runs: more steps for larger k_u at the same du_max
         assert res[f"ku0_du{du}"]["steps"] < res[f"ku50_du{du}"]["steps"] < res[f"ku1000_du{du}"]["steps"]
         assert res[f"ku1000_du{du}"]["min_step_size"] < 0.1 * res[f"ku0_du{du}"]["min_step_size"]
