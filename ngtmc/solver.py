@@ -351,8 +351,38 @@ class Solver:
             if not lifted and not math.isfinite(E0):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
             slope = float(np.dot(rN, duN))
-            if not lifted and slope >= 0.0:
-                # indefinite tangent: shift it with mu M until the direction descends
+            u0.data = u
+
+            def line_search(slope):
+                """Backtracking on the step length; returns True if a step was accepted.
+
+                Energy (Armijo) while the energy can resolve the predicted decrease; near
+                convergence |slope| falls below the energy's round-off and the test switches to a
+                decrease of the residual norm. Guard: finite energy (J > 0 at the energy's
+                quadrature points) and J > 0 at the history points too (Psi_plus there feeds the
+                history; NaN would poison it)."""
+                near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
+                s = 1.0
+                for _ in range(opt.max_line_search):
+                    u.data = u0 + s * du
+                    E = self._energy(u)
+                    if math.isfinite(E) and self.min_J() > 0.0:
+                        if lifted or E <= E0 + opt.armijo * s * slope:
+                            return True
+                        if near_converged:
+                            self.a_u.Apply(u, tmp)
+                            if np.linalg.norm(tmp.FV().NumPy()[self._free_np]) <= (1 - 1e-4 * s) * res:
+                                return True
+                    s *= 0.5
+                u.data = u0
+                return False
+
+            accepted = (lifted or slope < 0.0) and line_search(slope)
+            if not accepted:
+                # the Newton direction ascends (indefinite tangent in a squeezed void), the energy
+                # does not decrease along it, or no fraction of it keeps J > 0 (near-singular
+                # tangent of broken elements after a large change of alpha): shift the tangent by
+                # mu M (Levenberg), mu raised tenfold each time
                 a_s = self._shift_form()
                 self._u_anchor.vec.data = u
                 mu = 1e-4 * self.E_max / float(np.min(self.h)) ** 2
@@ -364,44 +394,19 @@ class Solver:
                     assembly_time += time.perf_counter() - t0
                     t0 = time.perf_counter()
                     inv_s = self._factorize(a_s)
-                    du.data = inv_s * r
+                    tmp.data = r + a_s.mat * w  # w holds the remaining boundary values (0 if not lifted)
+                    du.data = inv_s * tmp
                     duN = du.FV().NumPy()
-                    duN[:] = np.where(self._dir_np, 0.0, -duN)
+                    duN[:] = np.where(self._dir_np, rem, -duN)
                     solve_time += time.perf_counter() - t0
                     slope = float(np.dot(rN, duN))
-                    if slope < 0.0:
+                    if (lifted or slope < 0.0) and line_search(slope):
+                        accepted = True
                         break
                     mu *= 10.0
-                if slope >= 0.0:
-                    return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "no descent direction")
-            # line search: energy (Armijo) while the energy can resolve the predicted decrease;
-            # near convergence |slope| falls below the energy's round-off and the test switches to
-            # a decrease of the residual norm
-            u0.data = u
-            near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
-            s = 1.0
-            accepted = False
-            for _ in range(opt.max_line_search):
-                u.data = u0 + s * du
-                E = self._energy(u)
-                # guard: finite energy (J > 0 at the energy's quadrature points) and J > 0 at the
-                # history points too (Psi_plus there feeds the history; NaN would poison it)
-                if math.isfinite(E) and self.min_J() > 0.0:
-                    if lifted:
-                        accepted = True
-                        break
-                    if E <= E0 + opt.armijo * s * slope:
-                        accepted = True
-                        break
-                    if near_converged:
-                        self.a_u.Apply(u, tmp)
-                        if np.linalg.norm(tmp.FV().NumPy()[self._free_np]) <= (1 - 1e-4 * s) * res:
-                            accepted = True
-                            break
-                s *= 0.5
             if not accepted:
-                u.data = u0
-                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "line search failed")
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted,
+                                    "line search failed" if not lifted else "no admissible step towards the boundary values")
         # one last residual check after the final update
         self.a_u.Apply(u, r)
         rN = r.FV().NumPy()

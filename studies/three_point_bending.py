@@ -128,7 +128,7 @@ PARAMETERS = {
 
 # mesh and step sizes only
 RESOLUTIONS = {
-    "quick": {"h_band": 0.015, "h_void": 0.03, "h_indenter": 0.08, "h_beam": 0.25, "du_max": 1e-3, "stop_load": 0.15},
+    "quick": {"h_band": 0.015, "h_void": 0.03, "h_indenter": 0.08, "h_beam": 0.25, "du_max": 1e-3, "stop_load": 0.14},
     "medium": {"h_band": 0.01, "h_void": 0.025, "h_indenter": 0.06, "h_beam": 0.25, "du_max": 1e-3, "stop_load": 0.15},
     "paper": {"h_band": 0.0075, "h_void": 0.015, "h_indenter": 0.04, "h_beam": 0.15, "du_max": 0.5e-3, "stop_load": 0.15},
 }
@@ -138,12 +138,19 @@ RESOLUTION_PARAMETERS = {
     "h_indenter": ("mm", "element size in the indenter"),
     "h_beam": ("mm", "element size in the rest of the beam (and half of it in the support zones)"),
     "du_max": ("mm", "largest load increment of Eq. 20"),
-    "stop_load": ("mm", "load at which the run stops, <= final_load (0.15 at every resolution; the CI "
+    "stop_load": ("mm", "load at which the run stops, <= final_load (0.14 at quick, see KNOWN_FAILURE; 0.15 otherwise; the CI "
                         "test stops earlier, just after the drop, to skip the long post-failure tail)"),
 }
 DEFAULT_RESOLUTION = "quick"
 
 SNAPSHOT_LOADS = [0.05, 0.08, 0.09, 0.1, 0.11, 0.13, 0.15]
+
+#: Open defect, kept visible: the quick run to 0.15 mm failed at 0.148 mm (718 accepted steps, long
+#: after the peak at 0.098 mm and the drop) when Newton could not converge at the minimum step,
+#: reproducible from that run's checkpoint. The quick run therefore stops at 0.14 mm; the peak and
+#: the post-failure plateau (about 2.2 N/mm) are unaffected.
+KNOWN_FAILURE = {"resolution": "quick", "load_mm": 0.148078, "steps": 718,
+                 "message": "no convergence in 25 Newton iterations at du_min = 1e-8 mm"}
 
 #: Measured at each resolution (see the docstring; wall times on a shared, overloaded 2-core machine).
 MEASURED = {
