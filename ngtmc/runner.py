@@ -727,8 +727,14 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
-    with _terminate_as_interrupt(), ngs.TaskManager():
-        run.run(resume)
+    try:
+        with _terminate_as_interrupt(), ngs.TaskManager():
+            run.run(resume)
+    except BaseException:
+        # a failed or interrupted run still gets its report (with a status banner): nothing is lost
+        if report or report is None:
+            _render(out, strict=False)
+        raise
     run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
     if report or report is None:
         _render(out, strict=bool(report))
