@@ -91,7 +91,8 @@ def _cmd_run(args) -> int:
     except Exception as e:
         print(f"ngtmc: run failed: {type(e).__name__}: {e}", file=sys.stderr)
         return 1
-    print(out)
+    report = out / "report.html"
+    print(f"report: {report.resolve()}" if report.exists() else out)
     return 0
 
 
