@@ -633,7 +633,7 @@ class _Engine:
         r = s.u.vec.CreateVector()
         orders = []
         for (name, dens, reg), (_, dT, _) in zip(self.terms, trial_terms):
-            meas = ngs.dx(definedon=s.mesh.Materials(reg))
+            meas = s.energy_measure(name, reg)
             a = ngs.BilinearForm(s.fes_u, symmetric=True)
             a += ngs.Variation(dT * meas)
             a.Apply(s.u.vec, r)

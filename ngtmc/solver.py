@@ -219,10 +219,25 @@ class Solver:
             terms.append(("regularisation", phi, _regex(_names(reg.regions))))
         return terms
 
+    def energy_measure(self, name: str, regions: str):
+        """Integration measure of the displacement energy term ``name`` on ``regions`` (regex).
+
+        Elastic terms of order-2 (or higher) displacements are integrated at the points of the
+        history's integration rule (order 2p: 6 points on a triangle for p = 2), not with NGSolve's
+        default for a Variation (order 2p - 2: 3 points). With the default rule the energy does not
+        see J between its 3 points: in a squeezed void an element can fold towards J = 0 at the
+        history points at no energy cost, the J > 0 guard then cuts every Newton step and Newton
+        stalls (three-point bending after the peak). With the history rule the energy, the J guard
+        and the history all use the same points. Linear elements keep the default (F is constant per
+        element); the Hessian regulariser keeps the default (exact for p = 2)."""
+        if name.startswith("elastic") and self.order >= 2:
+            return ngs.dx(definedon=self.mesh.Materials(regions), intrules=self.irs.GetIntegrationRules())
+        return ngs.dx(definedon=self.mesh.Materials(regions))
+
     def _energy_form(self, trial, extra=None):
         a = ngs.BilinearForm(self.fes_u, symmetric=True)
-        for _, density, regions in self.energy_terms(trial):
-            a += ngs.Variation(self._maybe_compile(density) * ngs.dx(definedon=self.mesh.Materials(regions)))
+        for name, density, regions in self.energy_terms(trial):
+            a += ngs.Variation(self._maybe_compile(density) * self.energy_measure(name, regions))
         if extra is not None:
             a += ngs.Variation(extra)
         return a

@@ -1,6 +1,7 @@
 """The NGSolve traps of NGSOLVE_NOTES.md that touch this code, each pinned: the trap itself is shown
 to give a wrong number silently, and ngtmc is shown to avoid it."""
 import dataclasses
+import math
 
 import numpy as np
 import ngsolve as ngs
@@ -104,3 +105,52 @@ def test_tangent_is_symmetric():
     rows, cols, vals = a.mat.COO()
     K = sp.csr_matrix((np.asarray(vals), (np.asarray(rows), np.asarray(cols))))
     assert abs(K - K.T).max() < 1e-10 * abs(K).max()
+
+
+def _one_triangle_scene(order):
+    """The reference triangle (0,0), (1,0), (0,1) as a one-element mesh (mm)."""
+    from netgen.meshing import Element1D, Element2D, FaceDescriptor, Mesh, MeshPoint
+    from netgen.csg import Pnt
+    m = Mesh(dim=2)
+    pts = [m.Add(MeshPoint(Pnt(x, y, 0))) for x, y in ((0, 0), (1, 0), (0, 1))]
+    m.Add(FaceDescriptor(surfnr=1, domin=1, bc=1))
+    m.Add(Element2D(1, pts))
+    for k, (a, b) in enumerate(((0, 1), (1, 2), (2, 0)), start=1):
+        m.Add(Element1D([pts[a], pts[b]], index=k))
+    for k, name in enumerate(("bottom", "hyp", "left"), start=1):
+        m.SetBCName(k - 1, name)
+    m.SetMaterial(1, "solid")
+    mesh = ngs.Mesh(m)
+    return ngtmc.Scene(mesh=mesh, materials={"solid": ngtmc.Material(E=100.0, nu=0.3, Gc=1.0, l0=1.0)},
+                       supports=[ngtmc.Support("left", x=True)], load=ngtmc.DisplacementLoad("bottom", direction="y"),
+                       order=order)
+
+
+def test_order_two_elastic_energy_sees_a_fold_between_the_default_points():
+    """The trap: a Variation integrates an order-2 elastic energy with NGSolve's default rule of
+    order 2p - 2 = 2 (the three edge midpoints of a triangle). u_y = -0.8 y^2 folds the element for
+    y > 0.625 (J = 1 - 1.6 y < 0) while J = 0.2 > 0 at all three midpoints: the default-rule energy
+    is finite, so Newton can walk into such folds (it stalled in the squeezed void of the three-point
+    bending run). ngtmc integrates the elastic terms at the history points (order 4, six points, one
+    at y = 0.817): the folded state has no finite energy."""
+    s = ngtmc.Solver(_one_triangle_scene(order=2))
+    s.u.Set(ngs.CF((0, -0.8 * ngs.y ** 2)))
+    uT = s.fes_u.TrialFunction()
+    default = ngs.BilinearForm(s.fes_u)
+    for name, dens, reg in s.energy_terms(uT):
+        default += ngs.Variation(dens * ngs.dx(definedon=s.mesh.Materials(reg)))
+    assert math.isfinite(default.Energy(s.u.vec))  # the trap: a folded element with finite energy
+    assert not math.isfinite(s.a_u.Energy(s.u.vec))
+    # an unfolded quadratic field: the energy is the order-4 integral of the density
+    s.u.Set(ngs.CF((0.05 * ngs.x * ngs.y, -0.3 * ngs.y ** 2)))
+    dens = sum(d for _, d, _ in s.energy_terms(s.u))
+    assert s.a_u.Energy(s.u.vec) == pytest.approx(ngs.Integrate(dens, s.mesh, order=4), rel=1e-12)
+    assert default.Energy(s.u.vec) != pytest.approx(s.a_u.Energy(s.u.vec), rel=1e-6)
+
+
+def test_linear_elements_keep_the_one_point_rule():
+    """P1 displacements have a constant F per element: the one-point default rule is exact."""
+    s = ngtmc.Solver(_one_triangle_scene(order=1))
+    s.u.Set(ngs.CF((0.01 * ngs.x, -0.02 * ngs.y + 0.005 * ngs.x)))
+    dens = sum(d for _, d, _ in s.energy_terms(s.u))
+    assert s.a_u.Energy(s.u.vec) == pytest.approx(ngs.Integrate(dens, s.mesh, order=6), rel=1e-12)
