@@ -131,6 +131,9 @@ PARAMETERS = {
     "clamp_strip": (25.0, "mm", "height of the strip along the clamped edge without fracture (our choice)"),
     "k_u": (50.0, "1/N", "step-size sensitivity of Eq. 20, W_f per unit thickness (paper: 50)"),
     "staggered": ("single", "-", "staggered scheme: 'single' (paper) or 'converged'"),
+    "load_introduction": ("indenter", "-", "'indenter' (paper: an indenter pushes the arm across a 6 mm void) or "
+                          "'segment' (diagnostic: no indenter and no void; the schedule minus the gap is imposed on "
+                          "the arm's lower face from load_x to its end)"),
 }
 
 RESOLUTIONS = {
@@ -170,9 +173,30 @@ REGIONS = "band|contact_zone|clamp_strip|panel|indenter|void"
 FRACTURE_REGIONS = ["band", "panel"]
 
 
+def _segment(p: dict) -> bool:
+    mode = str(p.get("load_introduction", "indenter"))
+    if mode not in ("indenter", "segment"):
+        raise ValueError(f"l_panel: load_introduction = {mode!r} is not one of 'indenter', 'segment'")
+    return mode == "segment"
+
+
+def effective_gap(p: dict) -> float:
+    """Gap crossed before the panel is loaded, mm: ``gap`` with the indenter, 0 for segment loading."""
+    return 0.0 if _segment(p) else float(p["gap"])
+
+
+def effective_schedule(p: dict) -> list:
+    """Imposed displacement turning points, mm (the schedule minus the gap for segment loading)."""
+    shift = float(p["gap"]) - effective_gap(p)
+    sched = [float(x) for x in p["schedule"]]
+    return [sched[0]] + [x - shift for x in sched[1:]]
+
+
 def build_mesh(p: dict):
     """Mesh with regions ``band``, ``contact_zone``, ``panel``, ``clamp_strip`` (the panel),
-    ``indenter`` and ``void``; boundaries ``clamp`` (y = 0) and ``load`` (indenter's flat edge)."""
+    ``indenter`` and ``void``; boundaries ``clamp`` (y = 0) and ``load`` (indenter's flat edge).
+    With ``load_introduction = 'segment'``: no indenter and no void, ``load`` is the arm's lower
+    face from x = load_x to 500 mm."""
     from netgen.occ import Circle, Glue, MoveTo, OCCGeometry, Pnt, Y
     import ngsolve as ngs
 
@@ -180,9 +204,16 @@ def build_mesh(p: dict):
     margin, cs = float(p["void_margin"]), float(p["clamp_strip"])
     if not (xl + R < 500 and xl - R - margin > 250):
         raise ValueError("l_panel geometry: the indenter and its void must fit under the arm (250 < x < 500)")
-    outer = MoveTo(0, 0).LineTo(250, 0).LineTo(250, 250).LineTo(500, 250).LineTo(500, 500).LineTo(0, 500).Close().Face()
+    if _segment(p):
+        outer = (MoveTo(0, 0).LineTo(250, 0).LineTo(250, 250).LineTo(xl, 250).LineTo(500, 250).LineTo(500, 500)
+                 .LineTo(0, 500).Close().Face())
+    else:
+        outer = MoveTo(0, 0).LineTo(250, 0).LineTo(250, 250).LineTo(500, 250).LineTo(500, 500).LineTo(0, 500).Close().Face()
     band = MoveTo(150, 230).Rectangle(110, 90).Face() * outer
-    cz = MoveTo(xl - 40, 250).Rectangle(500 - (xl - 40), 20).Face()
+    if _segment(p):  # a vertex at x = load_x splits the arm's lower face: the load segment is its own edge
+        cz = MoveTo(xl - 40, 250).LineTo(xl, 250).LineTo(500, 250).LineTo(500, 270).LineTo(xl - 40, 270).Close().Face()
+    else:
+        cz = MoveTo(xl - 40, 250).Rectangle(500 - (xl - 40), 20).Face()
     cstrip = MoveTo(0, 0).Rectangle(250, cs).Face()
     rest = outer - band - cz - cstrip
     band.faces.name = "band"
@@ -192,6 +223,13 @@ def build_mesh(p: dict):
     cstrip.faces.name = "clamp_strip"
     rest.faces.name = "panel"
     cstrip.edges.Min(Y).name = "clamp"
+    if _segment(p):
+        shape = Glue([band, cz, cstrip, rest])
+        for e in shape.edges:
+            c = e.center
+            if abs(c.y - 250) < 1e-9 and xl < c.x < 500:
+                e.name = "load"
+        return ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=float(p["h_far"])))
     yb = 250 - gap - R
     half = Circle(Pnt(xl, yb), R).Face() * MoveTo(xl - R - 1, yb).Rectangle(2 * R + 2, R + 1).Face()
     half.faces.name = "indenter"
@@ -206,6 +244,14 @@ def build_mesh(p: dict):
 
 def build_scene(p: dict) -> ngtmc.Scene:
     mat = ngtmc.Material(E=float(p["E"]), nu=float(p["nu"]), Gc=float(p["Gc"]), l0=float(p["l0"]))
+    if _segment(p):
+        return ngtmc.Scene(
+            mesh=build_mesh(p), materials={"band|contact_zone|clamp_strip|panel": mat},
+            supports=[ngtmc.Support("clamp", x=True, y=True)],
+            load=ngtmc.DisplacementLoad("load", direction="y"),
+            fracture_regions=FRACTURE_REGIONS, regulariser=None,
+            residual_stiffness=float(p["residual_stiffness"]), thickness=float(p["thickness"]), order=1,
+            name="l_panel_segment")
     return ngtmc.Scene(
         mesh=build_mesh(p),
         materials={REGIONS: mat},
@@ -224,14 +270,15 @@ def build_scene(p: dict) -> ngtmc.Scene:
 
 def cases(p: dict) -> list[Case]:
     du_max = float(p["du_max"])
-    sched = ngtmc.Schedule([float(x) for x in p["schedule"]])
+    sched = ngtmc.Schedule(effective_schedule(p))
+    shift = float(p["gap"]) - effective_gap(p)
     return [Case(
         name="main", label=f"this model (k_u = {float(p['k_u']):g} 1/N, du_max = {du_max:g} mm)",
         scene=partial(build_scene, dict(p)),
         schedule=sched,
         control=ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=min(float(p["du_min"]), du_max)),
         options={"staggered": p.get("staggered", "single")},
-        snapshot_loads=[5.9, 6.1, 6.2, 6.3, 7.0],
+        snapshot_loads=[x - shift for x in (5.9, 6.1, 6.2, 6.3, 7.0) if x - shift >= 0],
         parameters={"k_u": float(p["k_u"]), "du_max": du_max},
     )]
 
@@ -252,7 +299,7 @@ def references(p: dict) -> list[dict]:
     """Winkler band and series A (whole 100 mm panel, N), shifted by the gap, scaled to the scene
     thickness (thickness / 100 mm)."""
     import pandas as pd
-    gap = float(p["gap"])
+    gap = effective_gap(p)
     scale = float(p["thickness"]) / 100.0
     band = pd.read_csv(_data_path("lshape_winkler_experiment_envelope_kN_mm.csv"))
     a = pd.read_csv(_data_path("lshape_winkler_experiment_seriesA_N_mm.csv"))
@@ -289,7 +336,7 @@ def phases(hist, p: dict, settle: float = 0.25) -> dict:
     steps after the first ``settle`` fraction of the unloading path (default 25 %, 0.075 mm);
     ``unload_wf_lag`` is the growth of W_f before that (from the turning point).
     """
-    sched = [float(x) for x in p["schedule"]]
+    sched = effective_schedule(p)
     u1, u2, u3 = sched[1], sched[2], sched[3]
     h = hist.sort_values("step").reset_index(drop=True)
     load = h["load"].to_numpy()
@@ -301,7 +348,7 @@ def phases(hist, p: dict, settle: float = 0.25) -> dict:
     unload = h.iloc[i1: i2 + 1]
     reload = h.iloc[i2:]
     j = int(first["force"].to_numpy().argmax())
-    gap = float(p["gap"])
+    gap = effective_gap(p)
     u_settle = u1 - settle * abs(u1 - u2)
     settled = unload[unload["load"] <= u_settle + 1e-12]
     out = {

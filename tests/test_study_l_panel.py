@@ -113,3 +113,23 @@ def test_quick_values_as_measured(run):
     p, h, ph = run
     for k in ("first_peak_force", "reload_peak_force", "force_first_loading_at_gap"):
         assert ph[k] == pytest.approx(MEASURED[k], rel=0.05), k
+
+
+def test_segment_loading_variant_has_no_contact():
+    """The diagnostic variant ``load_introduction = 'segment'`` (no indenter, no void, the schedule
+    minus the gap imposed on the arm's lower face from x = 470 to 500 mm) isolates the fracture
+    model from the contact: used to show that the panel's strength does not come from the contact."""
+    import ngsolve as ngs
+
+    _, p = study_parameters(S, "quick", {"load_introduction": "segment"})
+    case = S.cases(p)[0]
+    scene = case.build_scene()
+    mesh = scene.mesh
+    assert set(mesh.GetMaterials()) == {"band", "contact_zone", "clamp_strip", "panel"}
+    assert ngs.Integrate(1, mesh, definedon=mesh.Boundaries("load")) == pytest.approx(30.0)
+    assert scene.regulariser is None and scene.displacement_order == 1 and scene.density is None
+    assert list(case.schedule.points) == pytest.approx([0.0, 0.3, 0.0, 1.0])
+    band = S.references(p)[0]
+    assert band["x"][0] == pytest.approx(0.0)  # the Winkler band is not shifted
+    with pytest.raises(ValueError, match="load_introduction"):
+        S.cases(study_parameters(S, "quick", {"load_introduction": "plate"})[1])[0].build_scene()
