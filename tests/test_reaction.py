@@ -41,13 +41,15 @@ def test_reaction_by_residual_equals_traction_integral_homogeneous(order):
 
 def test_traction_integral_converges_to_residual_reaction():
     """With clamped edges the traction has corner singularities: the pointwise traction
-    integral converges to the (variationally consistent) residual reaction as h falls."""
+    integral converges to the (variationally consistent) residual reaction as h falls, slowly
+    (about h^0.25, as a corner singularity allows). Measured with the elastic energy integrated
+    at the history points: 5.3e-3, 4.4e-3, 3.8e-3 for h = 0.1, 0.05, 0.025 mm."""
     diffs = []
-    for maxh in (0.1, 0.05):
+    for maxh in (0.1, 0.05, 0.025):
         s = compressed_block(2, maxh=maxh)
         diffs.append(abs(traction_force(s, "top") - s.reaction()) / s.reaction())
     assert diffs[0] < 1e-2
-    assert diffs[1] < 0.75 * diffs[0]
+    assert diffs[1] < 0.9 * diffs[0] and diffs[2] < 0.9 * diffs[1], diffs
 
 
 def test_equilibrium_of_opposite_supports():
