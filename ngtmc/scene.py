@@ -134,6 +134,10 @@ class Scene:
         Out-of-plane thickness in 2D, mm (> 0). Ignored in 3D.
     order : int or None
         Polynomial order of the displacement; None chooses 2 with a regulariser and 1 without.
+    variable_order : bool
+        With ``order=None`` and a regulariser: order 2 only on the elements where the regulariser
+        acts (and on all their edges), order 1 everywhere else (default True). False: order 2 on
+        every element.
     name : str
         Free label used in messages and reports.
     """
@@ -151,6 +155,7 @@ class Scene:
     residual_stiffness: float = 1e-6
     thickness: float = 1.0
     order: int | None = None
+    variable_order: bool = True
     name: str = "scene"
     _checked: bool = field(default=False, repr=False)
 

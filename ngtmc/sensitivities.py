@@ -9,7 +9,7 @@
     g["E"]            # dJ/dE, J-unit per MPa
 
 What is differentiated (see ``docs/sensitivities.md`` for the derivation): the scheme that
-:class:`~ngtmc.simulation.Simulation` actually solved with ``staggered="single"``. At every recorded
+:class:`~ngtmc.simulation.Simulation` actually solved with ``scheme="single-pass"``. At every recorded
 load step n, with the imposed displacement lambda_n held fixed,
 
 1. alpha_n = P_n(A(H_{n-1})^{-1} f(H_{n-1})), P_n the projection onto [alpha_{n-1}, 1];
@@ -56,6 +56,7 @@ from . import fracture
 from .materials import deformation_gradient, psi_plus
 from .scene import Scene
 from .simulation import Simulation
+from .discretisation import rules
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, Schedule
 
@@ -266,14 +267,14 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     """Run ``scene`` through ``schedule`` (adaptive steps as in :class:`~ngtmc.simulation.Simulation`)
     and store every accepted state for :func:`gradient`.
 
-    ``options`` go to :class:`~ngtmc.simulation.Simulation`; only ``staggered="single"`` (the paper's
+    ``options`` go to :class:`~ngtmc.simulation.Simulation`; only ``scheme="single-pass"`` (the paper's
     scheme, the default) can be differentiated. For gradients that agree with finite differences to
     1e-4, converge Newton tightly, e.g. ``newton=NewtonOptions(rtol=1e-12)``. ``checkpoint_every``:
     store only every k-th state (see :class:`Path`). Returns a :class:`Path`."""
     if checkpoint_every is not None and int(checkpoint_every) < 1:
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
-    if options.get("staggered", "single") != "single":
-        raise ValueError("record_path: only staggered='single' (the paper's scheme) can be differentiated")
+    if options.get("scheme", "single-pass") != "single-pass":
+        raise ValueError("record_path: only scheme='single-pass' (the paper's scheme) can be differentiated so far")
     t0 = time.perf_counter()
     sim = Simulation(scene, schedule, control, newton=newton, **options)
     s = sim.solver
@@ -543,14 +544,6 @@ def evaluate(path: Path, objective: Objective) -> float:
 
 
 # ====================================================================== adjoint engine
-def _rules(mesh, order):
-    if mesh.dim == 2:
-        types = (ngs.TRIG, ngs.QUAD)
-    else:
-        types = (ngs.TET, ngs.HEX, ngs.PRISM, ngs.PYRAMID)
-    return {et: ngs.IntegrationRule(et, order) for et in types}
-
-
 class _FormSet:
     """Linear forms of the partial derivatives of sum_i int cf_i, built on first use."""
 
@@ -599,7 +592,7 @@ class _Engine:
         self.v = s.fes_u.TestFunction()
         self.params = _all_parameters(s)
         self.terms = s.energy_terms(s.u)
-        self.term_orders = self._detect_u_rules()
+        self.term_measures = [s.energy_measure(name, reg) for name, _, reg in self.terms]
         # adjoint-carrying GridFunctions
         self.z_u = ngs.GridFunction(s.fes_u)      # residual contraction vector
         self.z_H = ngs.GridFunction(s.irs)        # adjoint density of Psi_plus at the history points
@@ -611,50 +604,8 @@ class _Engine:
             self.frac_ind = mesh.MaterialCF({r: 1.0 for r in set(mesh.GetMaterials())
                                              if any(re.fullmatch(f, r) for f in s.fracture_regions)}, default=0.0)
             self.dx_Hf = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=s.irs.GetIntegrationRules())
-            self.dx_af = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=_rules(mesh, 2))
+            self.dx_af = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=rules(mesh, 2))
         self._build()
-
-    # ---------------------------------------------------------------- integration rule of a_u
-    def _detect_u_rules(self) -> list:
-        """Quadrature order NGSolve uses for each displacement energy term.
-
-        NGSolve picks the rule per integrator: on simplices it is 2p - 2 d, d the lowest
-        differential order of the term (so 2p - 2 for the elastic terms and 2p - 4 for the Hessian
-        regulariser, a single point for p = 2), which matters on curved elements. Each term's rule
-        is found by reproducing ``Variation(term).Apply`` at a perturbed state to round-off (raises
-        if none does): the partial derivatives of the residual must use the very same rule."""
-        s = self.s
-        u0 = s.u.vec.FV().NumPy().copy()
-        rng = np.random.default_rng(0)
-        h_min = float(np.min(s.h))
-        s.u.vec.FV().NumPy()[:] = 0.01 * h_min * rng.standard_normal(u0.size)  # strains ~ 1e-2, J > 0
-        uT = s.fes_u.TrialFunction()
-        trial_terms = s.energy_terms(uT)
-        r = s.u.vec.CreateVector()
-        orders = []
-        for (name, dens, reg), (_, dT, _) in zip(self.terms, trial_terms):
-            meas = s.energy_measure(name, reg)
-            a = ngs.BilinearForm(s.fes_u, symmetric=True)
-            a += ngs.Variation(dT * meas)
-            a.Apply(s.u.vec, r)
-            R = r.FV().NumPy().copy()
-            scale = max(float(np.max(np.abs(R))), 1e-300)
-            best = None
-            for order in range(0, 2 * s.order + 3):
-                lf = ngs.LinearForm(s.fes_u)
-                lf += dens.Diff(s.u, self.v) * ngs.dx(definedon=s.mesh.Materials(reg), intrules=_rules(s.mesh, order))
-                lf.Assemble()
-                err = float(np.max(np.abs(lf.vec.FV().NumPy() - R))) / scale
-                if np.isfinite(err) and (best is None or err < 0.5 * best[0]):
-                    best = (err, order)
-            if best is None or best[0] > 1e-9:
-                s.u.vec.FV().NumPy()[:] = u0
-                raise RuntimeError(f"could not reproduce the quadrature rule of the energy term {name!r} on {reg!r} "
-                                   f"(best relative mismatch: {best})")
-            orders.append(best[1])
-        s.u.vec.FV().NumPy()[:] = u0
-        s._r_valid = False
-        return orders
 
     # ---------------------------------------------------------------- forms
     def _scalar_forms(self, pieces, with_alpha=True):
@@ -666,9 +617,9 @@ class _Engine:
     def _build(self):
         s = self.s
         # <R(u; alpha, rho, p), z_u>: partials with respect to alpha, rho, p
-        self.res_pieces = [(dens.Diff(s.u, self.z_u),
-                            ngs.dx(definedon=s.mesh.Materials(reg), intrules=_rules(s.mesh, order)))
-                           for (_, dens, reg), order in zip(self.terms, self.term_orders)]
+        # the measures of the solver's energy terms: the partial derivatives of the residual use
+        # the very rules that Newton used
+        self.res_pieces = [(dens.Diff(s.u, self.z_u), meas) for (_, dens, _), meas in zip(self.terms, self.term_measures)]
         self.res_forms = self._scalar_forms(self.res_pieces)
         if s.alpha is not None:
             # history: sum_k w_k z_H(x_k) Psi_plus(u, rho, p)(x_k) over the fracture regions

@@ -5,10 +5,14 @@
     result.history          # pandas DataFrame, one row per accepted step
     result.units            # column -> unit
 
-Each accepted step runs the scheme of :mod:`ngtmc.solver` (alpha from H_{n-1}, Newton for u,
-history update). ``staggered="single"`` is the paper's single pass per step (damage lags one step);
-``staggered="converged"`` repeats the alpha-u-H pass at the same load until alpha changes by less
-than ``staggered_tol``, which allows larger steps for the same accuracy.
+Each accepted step solves the equations of the step by one of three schemes (``scheme=``):
+
+* ``"single-pass"``: the paper's scheme of :mod:`ngtmc.solver`: alpha from H_{n-1}, Newton for u,
+  history update, once per step; damage lags one step behind the displacement;
+* ``"staggered"``: the same pass repeated at the same load until alpha changes by less than
+  ``staggered_tol`` (alternate minimisation; converged damage, many passes while a crack runs);
+* ``"monolithic"``: Newton on (u, alpha) together with the history of the step inside the
+  iteration and alpha >= alpha_{n-1} as an active set (:mod:`ngtmc.coupled`); converged damage.
 
 A step that fails (Newton does not converge) is retried with half the increment; a run that fails
 at the minimum increment raises :class:`StepFailure`, which carries the history recorded so far.
@@ -28,7 +32,10 @@ from .scene import Scene
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, Schedule
 
-__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "simulate"]
+__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "simulate"]
+
+#: Solution schemes of a load step (see the module docstring).
+SCHEMES = ("single-pass", "staggered", "monolithic")
 
 #: Units of the history columns (force and energies are for the scene thickness in 2D).
 HISTORY_UNITS = {
@@ -93,11 +100,18 @@ class Simulation:
         Load schedule (mm); a number means monotonic loading from 0 to that value.
     control : AdaptiveStepControl, optional
         Step-size rule; default constant steps of 1/20 of the first segment.
-    staggered : "single" or "converged"
+    scheme : "single-pass", "staggered" or "monolithic"
+        How the equations of a step are solved (see the module docstring).
     staggered_tol : float
-        Largest change of alpha between two passes for "converged", dimensionless.
+        Largest change of alpha between two passes for "staggered", dimensionless.
     max_staggered : int
-        Pass limit for "converged" (the step counts as failed beyond it).
+        Pass limit for "staggered" (the step counts as failed beyond it).
+    coupled : dict, optional
+        Options of the "monolithic" scheme: ``alpha_tol``, ``max_iterations``, ``linear_solver``
+        of :class:`ngtmc.coupled.CoupledNewton`; ``fallback`` ("single-pass", "capped" or
+        "staggered", see ``_attempt_monolithic``); ``damage_cap`` (default 0.25) and
+        ``max_substeps`` (default 200) of its capped sub-steps; ``fallback_passes`` (default 400)
+        and ``newton_every`` (default 10) of its staggered fallback (see ``_attempt_monolithic``).
     newton : NewtonOptions, optional
     progress : bool or callable
         True prints a progress line to stderr about every 5 s; a callable receives each row dict.
@@ -108,26 +122,38 @@ class Simulation:
     """
 
     def __init__(self, scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
-                 staggered: str = "single", staggered_tol: float = 1e-3, max_staggered: int = 30,
+                 scheme: str = "single-pass", staggered_tol: float = 1e-3, max_staggered: int = 30,
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
-                 max_steps: int = 100000, compile: bool | str = True):
+                 max_steps: int = 100000, compile: bool | str = True, coupled: dict | None = None):
         if not isinstance(schedule, Schedule):
             schedule = Schedule.monotonic(float(schedule))
         if control is None:
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
-        if staggered not in ("single", "converged"):
-            raise ValueError(f"staggered = {staggered!r} is not one of 'single', 'converged'")
+        if scheme not in SCHEMES:
+            raise ValueError(f"scheme = {scheme!r} is not one of {', '.join(map(repr, SCHEMES))}")
         if not (staggered_tol > 0):
             raise ValueError(f"staggered_tol = {staggered_tol!r} must be > 0")
         self.scene = scene
         self.schedule = schedule
         self.control = control
-        self.staggered = staggered
+        self.scheme = scheme
         self.staggered_tol = float(staggered_tol)
         self.max_staggered = int(max_staggered)
         self.progress = progress
         self.max_steps = int(max_steps)
         self.solver = Solver(scene, newton=newton, compile=compile)
+        self.coupled = None
+        copt = dict(coupled or {})
+        self.fallback_passes = int(copt.pop("fallback_passes", 400))
+        self.newton_every = int(copt.pop("newton_every", 10))
+        self.fallback = str(copt.pop("fallback", "single-pass"))
+        if self.fallback not in ("single-pass", "staggered", "capped"):
+            raise ValueError(f"coupled fallback = {self.fallback!r} is not one of 'single-pass', 'staggered', 'capped'")
+        self.damage_cap = float(copt.pop("damage_cap", 0.25))
+        self.max_substeps = int(copt.pop("max_substeps", 200))
+        if scheme == "monolithic" and self.solver.alpha is not None:
+            from .coupled import CoupledNewton
+            self.coupled = CoupledNewton(self.solver, **copt)
         self.t = 0.0
         self.step = 0
         self.rows: list[dict] = []
@@ -147,6 +173,7 @@ class Simulation:
 
     def _record(self, **info):
         s = self.solver
+        t0 = time.perf_counter()
         en = s.energies()
         row = {
             "step": self.step,
@@ -168,6 +195,7 @@ class Simulation:
             "assembly_time": info["assembly_time"],
         }
         self.rows.append(row)
+        s.timings["record"] += time.perf_counter() - t0
         return row
 
     @property
@@ -182,16 +210,33 @@ class Simulation:
     # ------------------------------------------------------------------ one step
     def _attempt(self, t_new: float):
         """Try the step to pseudo-time t_new. Returns (ok, info dict)."""
-        s = self.solver
         load = self.schedule.load(t_new)
-        newton_its = 0
-        solve_t = assembly_t = 0.0
-        projected = 0
+        if self.coupled is not None:
+            return self._attempt_monolithic(load)
+        return self._passes(load, 1 if self.scheme == "single-pass" else self.max_staggered)
+
+    def _passes(self, load: float, max_passes: int, info: dict | None = None, newton_every: int = 0):
+        """alpha-u-H passes at a fixed load (Sect. 4 of MODEL.md): alpha from the latest history,
+        Newton for u, history. One pass is the paper's scheme; several, until alpha changes by
+        less than ``staggered_tol``, the converged staggered scheme. ``newton_every`` > 0 tries the
+        coupled Newton from the current iterate after that many passes, then after twice as many
+        passes each time, and stops when it converges (the fallback of the monolithic scheme). Returns (ok, info dict)."""
+        s = self.solver
+        info = info if info is not None else {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
+        info.update(staggered_iterations=0, projected=0)
         H_trial = s.H_committed
-        passes = 0
         alpha_prev_pass = None
-        for passes in range(1, (1 if self.staggered == "single" else self.max_staggered) + 1):
-            projected = s.solve_phase_field(H_trial)
+        passes = 0
+        next_newton = newton_every
+
+        def fail(message):
+            info.update(message=message, staggered_iterations=passes)
+            return False, info
+
+        if max_passes < 1:
+            return fail("no staggered passes allowed")
+        for passes in range(1, max_passes + 1):
+            info["projected"] = s.solve_phase_field(H_trial)
             if s.alpha is not None and alpha_prev_pass is not None:
                 change = float(np.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass)))
                 if change <= self.staggered_tol:
@@ -200,29 +245,116 @@ class Simulation:
                     passes -= 1
                     break
             res = s.solve_displacement(load)
-            newton_its += res.iterations
-            solve_t += res.solve_time
-            assembly_t += res.assembly_time
+            self._add(info, res)
             if not res.converged:
-                return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
-                               "message": res.message, "staggered_iterations": passes, "projected": projected}
+                return fail(res.message)
             if s.alpha is None:
                 break  # nothing may break: no history to keep
             H_trial = s.trial_history()
             if not np.all(np.isfinite(H_trial)):
-                return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
-                               "message": "history not finite (J <= 0 at a history point)",
-                               "staggered_iterations": passes, "projected": projected}
-            if self.staggered == "single":
+                return fail("history not finite (J <= 0 at a history point)")
+            if max_passes == 1:
                 break
+            if newton_every and passes >= next_newton:
+                next_newton = 2 * passes  # retries at 10, 20, 40, ... passes
+                ok, _ = self._coupled_newton(load, info)
+                if ok:
+                    info["staggered_iterations"] = passes
+                    return True, info
             alpha_prev_pass = s.alpha.vec.FV().NumPy().copy()
         else:
-            if self.staggered == "converged" and s.alpha is not None:
-                return False, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
-                               "message": f"staggered passes did not converge in {self.max_staggered}",
-                               "staggered_iterations": passes, "projected": projected}
-        return True, {"newton_iterations": newton_its, "solve_time": solve_t, "assembly_time": assembly_t,
-                      "staggered_iterations": max(passes, 1), "projected": projected, "H_trial": H_trial}
+            if max_passes > 1 and s.alpha is not None:
+                return fail(f"staggered passes did not converge in {max_passes}")
+        info.update(staggered_iterations=max(passes, 1), H_trial=H_trial)
+        return True, info
+
+    @staticmethod
+    def _add(info, res):
+        info["newton_iterations"] += res.iterations
+        info["solve_time"] += res.solve_time
+        info["assembly_time"] += res.assembly_time
+
+    def _coupled_newton(self, load: float, info: dict, alpha_upper=None):
+        """Coupled Newton from the current (u, alpha); on failure the iterate is restored."""
+        s = self.solver
+        keep = s.get_state()
+        res = self.coupled.solve(load, alpha_upper)
+        self._add(info, res)
+        info["coupled_iterations"] = info.get("coupled_iterations", 0) + res.iterations
+        if res.converged:
+            s._r_valid = False
+            H_trial = s.trial_history()
+            if np.all(np.isfinite(H_trial)):
+                info["H_trial"] = H_trial
+                return True, info
+            res.message = "history not finite (J <= 0 at a history point)"
+        s.set_state(keep)
+        info["message"] = res.message
+        return False, info
+
+    def _attempt_monolithic(self, load: float):
+        """Monolithic step: a predictor (Newton for u with alpha_{n-1}, the robust energy-guarded
+        solver of the contact problem), then the coupled Newton on (u, alpha).
+
+        Where the coupled Newton fails (a crack that runs unstably at this load has no nearby
+        solution, or the hybrid coupling of nearly broken elements defeats it), the step falls
+        back according to ``coupled["fallback"]``:
+
+        * "single-pass" (default): the paper's single pass from the state of the last step, so the
+          crack runs through lagged steps as in the paper and the coupled Newton takes over again
+          at the next step; ``staggered_iterations`` is 1 for such a step and 0 for a coupled one;
+        * "capped": coupled sub-steps with a capped damage increase (``_capped_substeps``), then
+          staggered passes;
+        * "staggered": staggered passes at the same load, the coupled Newton tried again after
+          ``newton_every``, 2 ``newton_every``, 4 ``newton_every``, ... passes.
+
+        Measured on the notched plate (tests/test_monolithic.py) and the three-point bending:
+        docs/performance.md."""
+        s = self.solver
+        saved = s.get_state()
+        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
+                "projected": 0}
+        res = s.solve_displacement(load)
+        self._add(info, res)
+        if not res.converged:
+            info["message"] = res.message
+            return False, info
+        ok, info = self._coupled_newton(load, info)
+        if ok:
+            return True, info
+        if self.fallback == "single-pass":
+            s.set_state(saved)
+            return self._passes(load, 1, info)
+        if self.fallback == "capped":
+            ok, info = self._capped_substeps(load, info)
+            if ok:
+                return True, info
+        return self._passes(load, self.fallback_passes, info, newton_every=self.newton_every)
+
+    def _capped_substeps(self, load: float, info: dict):
+        """Carry a crack that runs at this load by coupled sub-steps whose damage increase is capped:
+        sub-step k solves the coupled equations with alpha <= alpha^(k-1) + cap (still alpha >=
+        alpha_{n-1}); the crack advances by at most ``cap`` per dof and sub-step, so each sub-step
+        has a nearby solution. It ends when no cap binds (the state is then the equilibrium of the
+        step, as for the uncapped Newton); a failing sub-step halves the cap down to cap / 16."""
+        s = self.solver
+        cap = self.damage_cap
+        substeps = 0
+        while substeps < self.max_substeps:
+            upper = s.alpha.vec.FV().NumPy() + cap
+            ok, info = self._coupled_newton(load, info, upper)
+            if not ok:
+                cap /= 2.0
+                if cap < self.damage_cap / 16:
+                    info["message"] = f"capped coupled sub-steps failed ({info.get('message', '')})"
+                    return False, info
+                continue
+            substeps += 1
+            info["substeps"] = substeps
+            if not self.coupled.cap_binding:
+                return True, info
+        info["message"] = f"capped coupled sub-steps: no equilibrium in {self.max_substeps} sub-steps"
+        return False, info
 
     def advance(self) -> dict:
         """Take one accepted step (with cut-backs as needed); return its history row.

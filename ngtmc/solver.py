@@ -14,6 +14,8 @@ Units: mm, N, MPa. Forces and energies returned by this module are for the scene
 """
 from __future__ import annotations
 
+import dataclasses
+import functools
 from dataclasses import dataclass
 import math
 import re
@@ -26,9 +28,15 @@ from ngsolve.comp import IntegrationRuleSpace
 from . import contact_regularisation as creg
 from . import fracture
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
+from .discretisation import lower_order_outside, real_compile, rules
 from .scene import Scene, _names
 
-__all__ = ["Solver", "NewtonResult", "NewtonOptions"]
+__all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
+
+#: Parts of the solution procedure timed in ``Solver.timings`` (seconds, accumulated): tangent
+#: assembly, residual evaluation, factorization, triangular solves, line search (trial energies,
+#: residuals and J guard), phase-field solve, history update, and recording of a step's row.
+TIMING_KEYS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
 
 
 @dataclass
@@ -86,14 +94,16 @@ class Solver:
     ``H`` (history on an IntegrationRuleSpace, MPa), ``load`` (current imposed displacement, mm).
 
     ``compile``: True compiles the energy expressions symbolically (default), "real" generates
-    and compiles C++ code for them (faster assembly, needs ``ngscxx`` on PATH, worth it for long
-    runs), False evaluates them uncompiled.
+    and compiles C++ code for them (about 3x faster assembly and residuals; about 25 s of
+    compilation per Solver, so worth it for runs of more than a minute; falls back to True with
+    a warning where no C++ compiler is available), False evaluates them uncompiled.
     """
 
     def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool | str = True):
         scene.check()
         self.scene = scene
-        self.newton = newton or NewtonOptions()
+        # a copy: the options object passed in comes back unchanged (atol is filled in below)
+        self.newton = dataclasses.replace(newton) if newton is not None else NewtonOptions()
         self.mesh = mesh = scene.mesh
         self.dim = d = mesh.dim
         self.order = p = scene.displacement_order
@@ -116,6 +126,9 @@ class Solver:
             if dirichlet[c]:
                 kw[key] = _regex(dirichlet[c])
         self.fes_u = ngs.VectorH1(mesh, order=p, **kw)
+        self._variable_order = p >= 2 and scene.order is None and scene.variable_order and scene.regulariser is not None
+        if self._variable_order:
+            lower_order_outside(self.fes_u, mesh, _regex(_names(scene.regulariser.regions)))
         self.u = ngs.GridFunction(self.fes_u, name="displacement")
         self.free = self.fes_u.FreeDofs()
         self._free_np = np.array(list(self.free), dtype=bool)
@@ -160,14 +173,27 @@ class Solver:
         frac = scene.fracture_region_names
         self.fracture_regions = frac
         self._frac_re = _regex(frac)
-        others = [r for r in set(regions) if not any(re.fullmatch(f, r) for f in frac)]
-        self._other_re = _regex(sorted(others))
+        others = sorted(r for r in set(regions) if not any(re.fullmatch(f, r) for f in frac))
+        # regions whose elements carry the full order p (all of them unless the order varies)
+        high = set(regions) if p >= 2 else set()
+        if self._variable_order:
+            high = {r for r in regions if re.fullmatch(_regex(_names(scene.regulariser.regions)), r)}
+        self._high_re = _regex(sorted(r for r in others if r in high))
+        self._low_re = _regex(sorted(r for r in others if r not in high))
+        p_hist = p if (p >= 2 and any(r in high for r in regions if re.fullmatch(self._frac_re or "$^", r))) else 1
+        if not self._variable_order:
+            p_hist = p
 
         # ------------------------------------------------------------ history and phase field
-        self.irs = IntegrationRuleSpace(mesh, order=p)
+        # history points: the rule of order 2 p_hist, p_hist the displacement order of the
+        # fracture regions; the J > 0 guard uses the rule of order 2p (6 points on a triangle
+        # for p = 2) wherever the order is p
+        self.irs = IntegrationRuleSpace(mesh, order=p_hist)
+        self._guard_irs = self.irs if p_hist == p else IntegrationRuleSpace(mesh, order=p)
         self.dx_H = ngs.dx(intrules=self.irs.GetIntegrationRules())
         self.H = ngs.GridFunction(self.irs, name="history")
         self._scratch_irs = ngs.GridFunction(self.irs)
+        self._scratch_guard = ngs.GridFunction(self._guard_irs)
         self.H_committed = np.zeros(self.irs.ndof)
         if frac:
             self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self._frac_re))
@@ -189,29 +215,36 @@ class Solver:
         self._tmp = self.u.vec.CreateVector()
         self._u0 = self.u.vec.CreateVector()
         self._r_valid = False  # True while self._r holds the residual of the current u
+        #: accumulated seconds per part of the solution procedure (see TIMING_KEYS)
+        self.timings = dict.fromkeys(TIMING_KEYS, 0.0)
 
     # ================================================================= energies
     def _maybe_compile(self, cf):
         if self._compile == "real":
-            # C++ code generation via ngscxx: about 2x faster assembly, ~25 s compile per process
-            return cf.Compile(realcompile=True, wait=True)
+            compiled = real_compile(cf)
+            if compiled is not None:
+                return compiled
+            self._compile = True  # fall back for the remaining terms too (warned once)
         return cf.Compile() if self._compile else cf
 
-    def energy_terms(self, u):
+    def energy_terms(self, u, alpha=None):
         """List of (name, energy density CF, region regex) of the displacement problem for field or trial u.
 
         Names: "elastic_vol", "elastic_dev" (Psi_bar parts, degraded by g(alpha) in fracture
-        regions) and "regularisation" (Phi_bar). Densities in MPa, integrated over the regions."""
+        regions) and "regularisation" (Phi_bar). Densities in MPa, integrated over the regions.
+        ``alpha``: phase field to degrade with (a trial function for the coupled problem), default
+        the solver's alpha GridFunction."""
         F = deformation_gradient(u)
         terms = []
         sc = self.scene
         if self.alpha is not None:
-            g = fracture.degradation(self.alpha, sc.residual_stiffness)
+            g = fracture.degradation(self.alpha if alpha is None else alpha, sc.residual_stiffness)
             terms.append(("elastic_vol", g * psi_vol(F, self.K), self._frac_re))
             terms.append(("elastic_dev", g * psi_dev(F, self.G), self._frac_re))
-        if self._other_re:
-            terms.append(("elastic_vol", psi_vol(F, self.K), self._other_re))
-            terms.append(("elastic_dev", psi_dev(F, self.G), self._other_re))
+        for others in (self._high_re, self._low_re):
+            if others:
+                terms.append(("elastic_vol", psi_vol(F, self.K), others))
+                terms.append(("elastic_dev", psi_dev(F, self.G), others))
         reg = sc.regulariser
         if reg is not None:
             k_r = creg.regularisation_stiffness(reg.kbar_r, reg.length, self.K0)
@@ -220,27 +253,56 @@ class Solver:
         return terms
 
     def energy_measure(self, name: str, regions: str):
-        """Integration measure of the displacement energy term ``name`` on ``regions`` (regex).
+        """Integration measure (with its explicit rule) of the displacement energy term ``name`` on
+        ``regions`` (one of the region regexes of :meth:`energy_terms`). The one owner of the
+        integration rules: Newton, the reaction, the energies and the adjoint all use it.
 
-        Elastic terms of order-2 (or higher) displacements are integrated at the points of the
-        history's integration rule (order 2p: 6 points on a triangle for p = 2), not with NGSolve's
-        default for a Variation (order 2p - 2: 3 points). With the default rule the energy does not
-        see J between its 3 points: in a squeezed void an element can fold towards J = 0 at the
-        history points at no energy cost, the J > 0 guard then cuts every Newton step and Newton
-        stalls (three-point bending after the peak). With the history rule the energy, the J guard
-        and the history all use the same points. Linear elements keep the default (F is constant per
-        element); the Hessian regulariser keeps the default (exact for p = 2)."""
-        if name.startswith("elastic") and self.order >= 2:
-            return ngs.dx(definedon=self.mesh.Materials(regions), intrules=self.irs.GetIntegrationRules())
-        return ngs.dx(definedon=self.mesh.Materials(regions))
+        * Elastic terms where the displacement has order p >= 2: the rule of order 2p (6 points on
+          a triangle for p = 2), not NGSolve's default for a Variation (order 2p - 2: 3 points).
+          With the default rule the energy does not see J between its 3 points: in a squeezed void
+          an element can fold towards J = 0 at no energy cost, the J > 0 guard then cuts every
+          Newton step and Newton stalls (three-point bending after the peak). In the fracture
+          regions these are the history points, so energy, J guard and history agree.
+        * Elastic terms on order-1 elements (a scene without regulariser, or the elements outside
+          the regulariser's regions when the order varies per element): the rule of the history
+          (order 2, 3 points on a triangle) where some elements border order-2 ones or carry
+          the history, else one point (F is constant per element).
+        * The Hessian regulariser: order 2p - 4 (exact for p = 2 on straight elements; NGSolve's
+          default)."""
+        p = self.order
+        meas = functools.partial(ngs.dx, definedon=self.mesh.Materials(regions))
+        if name == "regularisation":
+            return meas(intrules=rules(self.mesh, max(2 * p - 4, 0)))
+        if p == 1:
+            return meas(intrules=rules(self.mesh, 0))
+        if regions == self._high_re or not self._variable_order:
+            return meas(intrules=self._guard_irs.GetIntegrationRules())
+        return meas(intrules=self.irs.GetIntegrationRules())
 
     def _energy_form(self, trial, extra=None):
+        """The displacement energy as a form with Apply / Energy / AssembleLinearization / mat.
+
+        A term whose energy is quadratic in u (the Hessian regulariser without damping) has a
+        constant tangent: it is assembled once and added (:class:`_QuadraticPlus`) instead of
+        being re-assembled at every Newton iteration."""
         a = ngs.BilinearForm(self.fes_u, symmetric=True)
+        quadratic = None
         for name, density, regions in self.energy_terms(trial):
-            a += ngs.Variation(self._maybe_compile(density) * self.energy_measure(name, regions))
+            term = ngs.Variation(self._maybe_compile(density) * self.energy_measure(name, regions))
+            if name == "regularisation" and self.scene.regulariser.damping == "none":
+                quadratic = ngs.BilinearForm(self.fes_u, symmetric=True)
+                quadratic += term
+                # a zero term on every element gives K the sparsity pattern of the tangent
+                quadratic += ngs.Variation(ngs.Parameter(0.0) * ngs.InnerProduct(trial, trial) * ngs.dx)
+                continue
+            a += term
         if extra is not None:
             a += ngs.Variation(extra)
-        return a
+        if quadratic is None:
+            return a
+        zero = ngs.GridFunction(self.fes_u)
+        quadratic.AssembleLinearization(zero.vec)
+        return _QuadraticPlus(a, quadratic.mat)
 
     def energies(self) -> dict:
         """Current energies, N mm (for the scene thickness): elastic_energy (int g Psi_bar),
@@ -249,7 +311,7 @@ class Solver:
         out = {"elastic_energy": 0.0, "regularisation_energy": 0.0}
         for name, density, regions in self.energy_terms(self.u):
             key = "regularisation_energy" if name == "regularisation" else "elastic_energy"
-            out[key] += float(ngs.Integrate(density, self.mesh, definedon=self.mesh.Materials(regions), order=2 * self.order))
+            out[key] += float(ngs.Integrate(density * self.energy_measure(name, regions), self.mesh))
         t = self.thickness
         out = {k: v * t for k, v in out.items()}
         wf = self.fracture_energy_per_thickness()
@@ -266,8 +328,8 @@ class Solver:
 
     def min_J(self) -> float:
         """Smallest det F at the history quadrature points, dimensionless."""
-        self._scratch_irs.Interpolate(ngs.Det(deformation_gradient(self.u)))
-        return float(self._scratch_irs.vec.FV().NumPy().min())
+        self._scratch_guard.Interpolate(ngs.Det(deformation_gradient(self.u)))
+        return float(self._scratch_guard.vec.FV().NumPy().min())
 
     def max_alpha(self) -> float:
         return float(self.alpha.vec.FV().NumPy().max()) if self.alpha is not None else 0.0
@@ -332,8 +394,11 @@ class Solver:
         shifted = 0
         r_ref = 0.0
         res = math.inf
+        tm = self.timings
         for it in range(1, opt.max_iterations + 1):
+            t0 = time.perf_counter()
             self.a_u.Apply(u, r)
+            tm["residual"] += time.perf_counter() - t0
             rN = r.FV().NumPy()
             rem = np.where(self._dir_np, target - uN, 0.0)
             lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
@@ -353,15 +418,21 @@ class Solver:
             t0 = time.perf_counter()
             self.a_u.AssembleLinearization(u)
             assembly_time += time.perf_counter() - t0
+            tm["assembly"] += time.perf_counter() - t0
             t0 = time.perf_counter()
             inv = self._factorize(self.a_u)
+            t1 = time.perf_counter()
             wN = w.FV().NumPy()
             wN[:] = rem
             tmp.data = r + self.a_u.mat * w
             du.data = inv * tmp
             duN = du.FV().NumPy()
             duN[:] = np.where(self._dir_np, rem, -duN)
-            solve_time += time.perf_counter() - t0
+            t2 = time.perf_counter()
+            solve_time += t2 - t0
+            tm["factorization"] += t1 - t0
+            tm["solve"] += t2 - t1
+            t_ls = time.perf_counter()
             E0 = math.nan if lifted else self._energy(u)  # lifted steps only need a finite trial energy
             if not lifted and not math.isfinite(E0):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
@@ -393,6 +464,7 @@ class Solver:
                 return False
 
             accepted = (lifted or slope < 0.0) and line_search(slope)
+            tm["line_search"] += time.perf_counter() - t_ls
             if not accepted:
                 # the Newton direction ascends (indefinite tangent in a squeezed void), the energy
                 # does not decrease along it, or no fraction of it keeps J > 0 (near-singular
@@ -407,15 +479,20 @@ class Solver:
                     t0 = time.perf_counter()
                     a_s.AssembleLinearization(u)
                     assembly_time += time.perf_counter() - t0
+                    tm["assembly"] += time.perf_counter() - t0
                     t0 = time.perf_counter()
                     inv_s = self._factorize(a_s)
+                    tm["factorization"] += time.perf_counter() - t0
                     tmp.data = r + a_s.mat * w  # w holds the remaining boundary values (0 if not lifted)
                     du.data = inv_s * tmp
                     duN = du.FV().NumPy()
                     duN[:] = np.where(self._dir_np, rem, -duN)
                     solve_time += time.perf_counter() - t0
                     slope = float(np.dot(rN, duN))
-                    if (lifted or slope < 0.0) and line_search(slope):
+                    t_ls = time.perf_counter()
+                    ok = (lifted or slope < 0.0) and line_search(slope)
+                    tm["line_search"] += time.perf_counter() - t_ls
+                    if ok:
                         accepted = True
                         break
                     mu *= 10.0
@@ -456,6 +533,7 @@ class Solver:
         of projected dofs. Returns 0 when the scene has no phase field."""
         if self.alpha is None:
             return 0
+        t0 = time.perf_counter()
         self._r_valid = False
         self.H.vec.FV().NumPy()[:] = self.H_committed if H_values is None else H_values
         self.a_alpha.Assemble()
@@ -468,6 +546,7 @@ class Solver:
         a = self.alpha.vec.FV().NumPy()
         projected = int(np.count_nonzero((a < self.alpha_committed) | (a > 1.0)))
         a[:] = np.clip(np.maximum(a, self.alpha_committed), 0.0, 1.0)
+        self.timings["phase_field"] += time.perf_counter() - t0
         return projected
 
     def psi_plus_values(self) -> np.ndarray:
@@ -478,7 +557,10 @@ class Solver:
 
     def trial_history(self) -> np.ndarray:
         """max(H_{n-1}, Psi_plus(u)) at the quadrature points (Eq. 7), MPa; not committed."""
-        return np.maximum(self.H_committed, self.psi_plus_values())
+        t0 = time.perf_counter()
+        H = np.maximum(self.H_committed, self.psi_plus_values())
+        self.timings["history"] += time.perf_counter() - t0
+        return H
 
     def update_history(self, H_trial: np.ndarray | None = None):
         """Commit H_n = max(H_{n-1}, Psi_plus(u_n)) and alpha_n (step 3). ``H_trial``: the
@@ -513,3 +595,37 @@ class Solver:
         return {"u": self.fes_u.ndof, "alpha": self.fes_a.ndof if self.fes_a is not None else 0,
                 "history_points": self.irs.ndof}
 
+
+
+class _QuadraticPlus:
+    """A nonlinear energy form plus a constant quadratic one, 1/2 u.K u, with the interface of an
+    NGSolve BilinearForm that the solvers use (Apply, Energy, AssembleLinearization, mat).
+
+    The regulariser of Eq. 3 is quadratic in u, so its tangent K is assembled once: at 35k dofs
+    that saves about a fifth of each tangent assembly. K must have the sparsity pattern of the
+    form's matrix (same space, volume terms only); this is checked once."""
+
+    def __init__(self, form, K):
+        self.form, self.K = form, K
+        self._t = K.CreateColVector()
+        self._checked = False
+
+    def Apply(self, x, y):
+        self.form.Apply(x, y)
+        y.data += self.K * x
+
+    def Energy(self, x) -> float:
+        self._t.data = self.K * x
+        return self.form.Energy(x) + 0.5 * ngs.InnerProduct(x, self._t)
+
+    def AssembleLinearization(self, x):
+        self.form.AssembleLinearization(x)
+        if not self._checked:
+            if self.form.mat.nze != self.K.nze:
+                raise RuntimeError("the constant regulariser matrix has another sparsity pattern than the tangent")
+            self._checked = True
+        self.form.mat.AsVector().data += self.K.AsVector()
+
+    @property
+    def mat(self):
+        return self.form.mat

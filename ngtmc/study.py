@@ -19,7 +19,31 @@ import pkgutil
 from types import ModuleType
 from typing import Any, Callable
 
-__all__ = ["Case", "StudyError", "list_studies", "load_study", "normalise_name", "study_parameters"]
+__all__ = ["Case", "StudyError", "list_studies", "load_study", "normalise_name", "study_parameters",
+           "SOLVER_PARAMETERS", "simulation_options"]
+
+#: Solver settings a study exposes next to its physics (``**SOLVER_PARAMETERS`` in PARAMETERS):
+#: name -> (default, unit, description). They change cost and, for ``scheme``, the time
+#: discretisation, never the model.
+SOLVER_PARAMETERS = {
+    "scheme": ("single-pass", "-", "solution scheme of a load step: 'single-pass' (paper), 'staggered' or 'monolithic'"),
+    "compile": ("real", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, 25 s to compile; "
+                             "falls back to 'symbolic' without a C++ compiler), 'symbolic' or 'none'"),
+}
+_COMPILE = {"real": "real", "symbolic": True, "none": False}
+
+
+def simulation_options(p: dict) -> dict:
+    """Keyword arguments of :class:`ngtmc.Simulation` from the solver settings in ``p``
+    (see SOLVER_PARAMETERS); raises StudyError on an unknown value."""
+    from .simulation import SCHEMES
+    scheme = p.get("scheme", SOLVER_PARAMETERS["scheme"][0])
+    compile_ = p.get("compile", SOLVER_PARAMETERS["compile"][0])
+    if scheme not in SCHEMES:
+        raise StudyError(f"scheme = {scheme!r} is not one of {', '.join(SCHEMES)}")
+    if compile_ not in _COMPILE:
+        raise StudyError(f"compile = {compile_!r} is not one of {', '.join(_COMPILE)}")
+    return {"scheme": scheme, "compile": _COMPILE[compile_]}
 
 
 @dataclass
@@ -32,7 +56,7 @@ class Case:
         runner, so listing the cases of a study is cheap).
     schedule: :class:`ngtmc.Schedule` or a final load in mm.
     control: :class:`ngtmc.AdaptiveStepControl` or None (the Simulation default).
-    options: keyword arguments for :class:`ngtmc.Simulation` (e.g. ``staggered=True``).
+    options: keyword arguments for :class:`ngtmc.Simulation` (e.g. ``scheme="monolithic"``).
     snapshot_loads: loads (mm) at which fields are saved; the runner saves the first accepted step
         at or past each load.
     parameters: case-specific values (e.g. ``{"gamma0": 1e-5}``) recorded in the metadata.

@@ -108,7 +108,7 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.study import Case
+from ngtmc.study import SOLVER_PARAMETERS, Case, simulation_options
 
 NAME = "l_panel"
 TITLE = "L-shaped panel: load, unload, reload through an indenter"
@@ -136,7 +136,7 @@ PARAMETERS = {
     "void_margin": (10.0, "mm", "void box extends this far left of the indenter (our choice)"),
     "clamp_strip": (25.0, "mm", "height of the strip along the clamped edge without fracture (our choice)"),
     "k_u": (50.0, "1/N", "step-size sensitivity of Eq. 20, W_f per unit thickness (paper: 50)"),
-    "staggered": ("single", "-", "staggered scheme: 'single' (paper) or 'converged'"),
+    **SOLVER_PARAMETERS,
     "load_introduction": ("indenter", "-", "'indenter' (paper: an indenter pushes the arm across a 6 mm void) or "
                           "'segment' (diagnostic: no indenter and no void; the schedule minus the gap is imposed on "
                           "the arm's lower face from load_x to its end)"),
@@ -282,7 +282,7 @@ def cases(p: dict) -> list[Case]:
         scene=partial(build_scene, dict(p)),
         schedule=sched,
         control=ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=min(float(p["du_min"]), du_max)),
-        options={"staggered": p.get("staggered", "single")},
+        options=simulation_options(p),
         snapshot_loads=[x - shift for x in (5.9, 6.1, 6.2, 6.3, 7.0) if x - shift >= 0],
         parameters={"k_u": float(p["k_u"]), "du_max": du_max},
     )]

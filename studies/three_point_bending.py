@@ -93,7 +93,7 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.study import Case
+from ngtmc.study import SOLVER_PARAMETERS, Case, simulation_options
 
 NAME = "three_point_bending"
 TITLE = "Three-point bending with an indenter"
@@ -129,7 +129,9 @@ PARAMETERS = {
     "k_u": (1000.0, "1/N", "step-size sensitivity of Eq. 20 (W_f per unit thickness)"),
     "du_min": (1e-8, "mm", "smallest load increment (paper)"),
     "final_load": (0.15, "mm", "final imposed displacement of the indenter (paper)"),
-    "staggered": ("single", "-", "staggered scheme: 'single' (paper) or 'converged'"),
+    "variable_order": (True, "-", "displacement order 2 only in the void (where the regulariser acts), 1 elsewhere; "
+                                  "False: order 2 everywhere"),
+    **SOLVER_PARAMETERS,
 }
 
 # mesh and step sizes only
@@ -230,6 +232,7 @@ def build_scene(p: dict) -> ngtmc.Scene:
         gamma0=float(p["gamma0"]),
         residual_stiffness=float(p["residual_stiffness"]),
         thickness=float(p["thickness"]),
+        variable_order=bool(p.get("variable_order", True)),
         name="three_point_bending",
     )
 
@@ -247,7 +250,7 @@ def make_case(p: dict, name: str = "main", label: str | None = None, k_u: float 
         scene=partial(build_scene, dict(p)),
         schedule=ngtmc.Schedule.monotonic(final),
         control=ngtmc.AdaptiveStepControl(du_max=du_max, k_u=k_u, du_min=min(float(p["du_min"]), du_max)),
-        options={"staggered": p.get("staggered", "single")},
+        options=simulation_options(p),
         snapshot_loads=[x for x in (SNAPSHOT_LOADS if snapshot_loads is None else snapshot_loads) if x <= final + 1e-12],
         parameters={"k_u": k_u, "du_max": du_max, "final_load": final},
     )

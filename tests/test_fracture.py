@@ -11,16 +11,16 @@ from scenes import tension_bar
 _CACHE = {}
 
 
-def _peak_stress(staggered, du):
-    if (staggered, du) not in _CACHE:
-        _CACHE[(staggered, du)] = _run_peak(staggered, du)
-    return _CACHE[(staggered, du)]
+def _peak_stress(scheme, du):
+    if (scheme, du) not in _CACHE:
+        _CACHE[(scheme, du)] = _run_peak(scheme, du)
+    return _CACHE[(scheme, du)]
 
 
-def _run_peak(staggered, du):
+def _run_peak(scheme, du):
     E, nu, Gc, l0 = 1000.0, 0.3, 1e-3, 1.0
     scene = tension_bar(E=E, nu=nu, Gc=Gc, l0=l0, maxh=0.1)
-    res = ngtmc.simulate(scene, 1.2e-3, ngtmc.AdaptiveStepControl(du_max=du), staggered=staggered, staggered_tol=1e-8)
+    res = ngtmc.simulate(scene, 1.2e-3, ngtmc.AdaptiveStepControl(du_max=du), scheme=scheme, staggered_tol=1e-8)
     sigma = res.history["force"].to_numpy() / (0.2 * scene.thickness)
     Ep = E / (1 - nu**2)
     expected = 3 * math.sqrt(3) / 16 * math.sqrt(Ep * Gc / l0)
@@ -30,7 +30,7 @@ def _run_peak(staggered, du):
 def test_homogeneous_tension_reaches_the_at2_peak_stress():
     """sigma_c = (3 sqrt(3) / 16) sqrt(E' Gc / l0), E' = E / (1 - nu^2) for plane strain with free
     lateral contraction (MODEL.md section 6). Staggered passes converged within each step."""
-    peak, expected, res = _peak_stress("converged", 2e-5)
+    peak, expected, res = _peak_stress("staggered", 2e-5)
     print(f"peak stress {peak:.6g} MPa, AT-2 {expected:.6g} MPa, difference {100 * (peak / expected - 1):+.3f} %")
     assert peak == pytest.approx(expected, rel=0.01)
     # homogeneous damage: alpha is uniform
@@ -41,9 +41,9 @@ def test_homogeneous_tension_reaches_the_at2_peak_stress():
 def test_single_pass_lags_damage_and_overshoots_the_peak_slightly():
     """The paper's single-pass scheme lags damage by one step: with the same steps its peak is
     higher than with converged passes, and it approaches it as the steps shrink."""
-    p_conv, expected, _ = _peak_stress("converged", 2e-5)
-    p_single_coarse, _, _ = _peak_stress("single", 4e-5)
-    p_single_fine, _, _ = _peak_stress("single", 1e-5)
+    p_conv, expected, _ = _peak_stress("staggered", 2e-5)
+    p_single_coarse, _, _ = _peak_stress("single-pass", 4e-5)
+    p_single_fine, _, _ = _peak_stress("single-pass", 1e-5)
     print(f"converged {p_conv:.5g}, single-pass du=4e-5 {p_single_coarse:.5g}, du=1e-5 {p_single_fine:.5g} MPa")
     assert p_single_coarse > p_single_fine > p_conv * (1 - 1e-4)
     assert abs(p_single_fine - expected) < abs(p_single_coarse - expected)

@@ -69,3 +69,32 @@ def test_exp_damping_is_the_energy_variant():
 
 def test_stiffness_scaling():
     assert regularisation_stiffness(1e-6, 8.0, 17333.0) == pytest.approx(1e-6 * 64 * 17333.0)
+
+
+def test_constant_regulariser_tangent_is_added_not_reassembled():
+    """The regulariser energy is quadratic in u, so the solver assembles its tangent once and adds
+    it; residual, energy and tangent equal those of one form holding every term."""
+    import dataclasses
+    from scenes import two_blocks
+    s = ngtmc.Solver(dataclasses.replace(two_blocks(), variable_order=False))
+    assert type(s.a_u).__name__ == "_QuadraticPlus"
+    ref = ngs.BilinearForm(s.fes_u, symmetric=True)
+    uT = s.fes_u.TrialFunction()
+    for name, dens, reg in s.energy_terms(uT):
+        ref += ngs.Variation(dens * s.energy_measure(name, reg))
+    rng = np.random.default_rng(1)
+    s.u.vec.FV().NumPy()[:] = 1e-3 * rng.standard_normal(s.fes_u.ndof)
+    r1, r2 = s.u.vec.CreateVector(), s.u.vec.CreateVector()
+    s.a_u.Apply(s.u.vec, r1)
+    ref.Apply(s.u.vec, r2)
+    np.testing.assert_allclose(r1.FV().NumPy(), r2.FV().NumPy(), rtol=0, atol=1e-12 * np.abs(r2.FV().NumPy()).max())
+    assert s.a_u.Energy(s.u.vec) == pytest.approx(ref.Energy(s.u.vec), rel=1e-12)
+    for _ in range(2):  # the constant part is added after every assembly, not accumulated
+        s.a_u.AssembleLinearization(s.u.vec)
+    ref.AssembleLinearization(s.u.vec)
+    v = s.u.vec.CreateVector()
+    v.FV().NumPy()[:] = rng.standard_normal(s.fes_u.ndof)
+    k1, k2 = v.CreateVector(), v.CreateVector()
+    k1.data = s.a_u.mat * v
+    k2.data = ref.mat * v
+    np.testing.assert_allclose(k1.FV().NumPy(), k2.FV().NumPy(), rtol=0, atol=1e-10 * np.abs(k2.FV().NumPy()).max())

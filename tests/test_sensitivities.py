@@ -204,8 +204,8 @@ def test_cost_and_memory(path):
 
 def test_errors(path):
     p = _params()
-    with pytest.raises(ValueError, match="staggered"):
-        S.record_path(D.build_scene(p), 0.05, staggered="converged")
+    with pytest.raises(ValueError, match="scheme"):
+        S.record_path(D.build_scene(p), 0.05, scheme="staggered")
     with pytest.raises(ValueError, match="unknown parameter"):
         S.gradient(path, S.ExternalWork(), wrt=("K",))
     with pytest.raises(ValueError, match="outside the recorded steps"):

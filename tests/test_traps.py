@@ -14,7 +14,7 @@ from scenes import bar_mesh, tension_bar, two_blocks
 def test_history_terms_are_integrated_at_the_history_points():
     """An IntegrationRuleSpace of order p uses a rule of order 2p; a plain dx on the P1 phase field
     would use order 2 and read the history at the wrong points (an IRS field is 0 elsewhere)."""
-    scene = dataclasses.replace(two_blocks(), fracture_regions="lower")  # order 2: rules differ
+    scene = dataclasses.replace(two_blocks(), fracture_regions="lower", variable_order=False)  # order 2: rules differ
     s = ngtmc.Solver(scene)
     assert s.order == 2
     # history = a smooth function sampled at the rule points: the load vector integrates it exactly

@@ -92,8 +92,8 @@ def test_schedule_and_step_control():
         ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-2)
     with pytest.raises(ValueError, match="k_u"):
         ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=-1)
-    with pytest.raises(ValueError, match="staggered"):
-        ngtmc.Simulation(tension_bar(), 0.01, staggered="twice")
+    with pytest.raises(ValueError, match="scheme"):
+        ngtmc.Simulation(tension_bar(), 0.01, scheme="twice")
 
 
 def test_unresolved_length_scale_warns():

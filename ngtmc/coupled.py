@@ -1,0 +1,338 @@
+"""Monolithic Newton solve of one load step on (u, alpha) together.
+
+With the history of the step inside the iteration, the discrete equations of step n are (Eq. 16
+with Eq. 7 evaluated at the current u, hybrid AT-2, g = (1 - alpha)^2 + k, c_w = 2)
+
+    R_u     = int g(alpha) P(F) : grad v  +  int k_r (Hu : Hv - 1/d Lu . Lv) I_void        = 0
+    R_alpha = int ( g'(alpha) H_n(u) + Gc alpha / l0 ) beta + Gc l0 grad alpha . grad beta  = 0
+    H_n(u)  = max(H_{n-1}, Psi_plus(u))                 at the history points
+    alpha_{n-1} <= alpha <= 1                           (irreversibility, and the P1 bound)
+
+so damage is not lagged by one step: the step ends in the state the paper's single-pass scheme
+reaches only as its steps shrink to zero. The tangent is not symmetric (the hybrid split drives
+alpha with Psi_plus, the displacement sees g(alpha) Psi_bar), so it is factorized with UMFPACK.
+
+The bounds on alpha are complementarity conditions, solved by a semi-smooth Newton method on
+mid(alpha - alpha_{n-1}, c R_alpha, alpha - 1) = 0 (c the inverse lumped (Gc/l0) mass of the
+dof): a dof is held on its bound where that is the median, else its equation R_alpha = 0 is
+solved. Iterates may leave the bounds (the P1 phase-field operator is no M-matrix, so a projected
+step would undo the Newton step); the converged state satisfies them. Newton steps are damped by a backtracking line search on a
+scaled residual norm (the hybrid system has no energy) with the guard of the displacement solver:
+finite residual and J > 0 at every history point.
+
+Units: mm, N, MPa; residual norms of the displacement equation in N (per scene thickness in 2D).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import ngsolve as ngs
+
+from . import fracture
+from .materials import deformation_gradient, psi_bar, psi_plus
+from .solver import NewtonResult
+
+__all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
+_DEBUG = False
+
+#: Linear solvers of the coupled tangent: "block-gmres" (GMRES preconditioned by the block lower
+#: triangle, with sparse Cholesky factors of the symmetric u-u and alpha-alpha blocks; the u-u
+#: factor reuses its symbolic step), "umfpack" or "pardiso" (direct, whole matrix).
+LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
+
+
+class CoupledNewton:
+    """Newton on (u, alpha) for a :class:`~ngtmc.solver.Solver` with a phase field.
+
+    The solver's ``u``, ``alpha`` and committed history ``H_committed`` / ``alpha_committed`` are
+    read and written; nothing is committed here (the caller commits the history when it accepts
+    the step). Convergence: the displacement residual as in :class:`~ngtmc.solver.NewtonOptions`
+    and the phase-field complementarity residual below ``alpha_tol`` times the residual of a
+    uniform unit alpha (dimensionless); ``max_iterations``: per attempt."""
+
+    def __init__(self, solver, alpha_tol: float = 1e-8, max_iterations: int = 15, linear_solver: str = "block-gmres",
+                 gmres_tol: float = 1e-10, gmres_maxsteps: int = 100):
+        if solver.alpha is None:
+            raise ValueError("CoupledNewton needs a scene with fracture regions (no phase field to couple)")
+        if linear_solver not in LINEAR_SOLVERS:
+            raise ValueError(f"linear_solver = {linear_solver!r} is not one of {', '.join(map(repr, LINEAR_SOLVERS))} "
+                             "(the coupled tangent is not symmetric: no 'sparsecholesky' on the whole matrix)")
+        self.gmres_tol = float(gmres_tol)
+        self.gmres_maxsteps = int(gmres_maxsteps)
+        self._inv_u = None
+        self.gmres_iterations = 0
+        self.s = s = solver
+        self.alpha_tol = float(alpha_tol)
+        self.max_iterations = int(max_iterations)
+        self.linear_solver = linear_solver
+        self.X = X = ngs.FESpace([s.fes_u, s.fes_a])
+        self.nu = s.fes_u.ndof
+        self.x = ngs.GridFunction(X)
+        self._free_base = np.array(list(X.FreeDofs()), dtype=bool)
+        self._dir_u = s._dir_np
+        self.form = self._build_form()
+        self._r = self.x.vec.CreateVector()
+        self._dx = self.x.vec.CreateVector()
+        self._w = self.x.vec.CreateVector()
+        self._tmp = self.x.vec.CreateVector()
+        self._x0 = self.x.vec.CreateVector()
+        # scale of the alpha residual: (Gc / l0) times the lumped mass, for alpha of order one
+        b = s.fes_a.TestFunction()
+        lump = ngs.LinearForm(s.fes_a)
+        lump += s.Gc / s.l0 * b * ngs.dx(definedon=s.mesh.Materials(s._frac_re))
+        lump.Assemble()
+        d = lump.vec.FV().NumPy().copy()
+        self.alpha_residual_scale = float(np.linalg.norm(d))
+        # scale of the complementarity function: alpha - bound against R_alpha / d (dimensionless)
+        self._ncp_scale = 1.0 / np.maximum(d, 1e-300 * max(d.max(), 1e-300))
+
+    def _build_form(self):
+        """The coupled residual form (non-symmetric). The degraded elastic energy enters as a
+        Variation on (u, alpha), which gives R_u and the alpha-residual g'(alpha) Psi_bar; the
+        hybrid formulation replaces Psi_bar there by H_n(u) (second term)."""
+        s = self.s
+        (u, a), (v, b) = self.X.TnT()
+        A = ngs.BilinearForm(self.X, symmetric=False)
+        for name, density, regions in s.energy_terms(u, alpha=a):
+            A += ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
+        F = deformation_gradient(u)
+        pp = psi_plus(F, s.K, s.G)
+        H_n = ngs.IfPos(pp - s.H, pp, s.H)
+        dg = -2.0 * (1.0 - a)  # g'(alpha) of AT-2; the residual stiffness is a constant
+        frac = s.mesh.Materials(s._frac_re)
+        dxH = ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules())
+        # cancel g'(alpha) Psi_bar b with the elastic terms' own rule, add g'(alpha) H_n b at the history points
+        A += s._maybe_compile(dg * H_n * b) * dxH
+        A += s._maybe_compile(-dg * psi_bar(F, s.K, s.G) * b) * s.energy_measure("elastic_vol", s._frac_re)
+        A += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(definedon=frac)
+        return A
+
+    # ------------------------------------------------------------------ state transfer
+    def _gather(self):
+        xN = self.x.vec.FV().NumPy()
+        xN[:self.nu] = self.s.u.vec.FV().NumPy()
+        xN[self.nu:] = self.s.alpha.vec.FV().NumPy()
+
+    def _scatter(self):
+        xN = self.x.vec.FV().NumPy()
+        self.s.u.vec.FV().NumPy()[:] = xN[:self.nu]
+        self.s.alpha.vec.FV().NumPy()[:] = xN[self.nu:]
+
+    # ------------------------------------------------------------------ solve
+    def solve(self, load: float, alpha_upper: np.ndarray | None = None) -> NewtonResult:
+        """Solve step ``load`` (imposed displacement, mm) from the current (u, alpha).
+
+        ``alpha_upper``: upper bounds of alpha per dof (default 1). A bound below 1 caps the damage
+        increment of a sub-step (see :meth:`ngtmc.simulation.Simulation._attempt_monolithic`);
+        after a converged solve, :attr:`cap_binding` tells whether a cap below 1 is active (the
+        crack wants to grow further at this load). On success the solver holds the converged u and
+        alpha (H not committed). On failure it holds the last iterate; the caller restores its
+        saved state."""
+        s = self.s
+        tm = s.timings
+        nu = self.nu
+        s._r_valid = False
+        s.H.vec.FV().NumPy()[:] = s.H_committed
+        self._gather()
+        x, r, dx, w, tmp, x0 = self.x.vec, self._r, self._dx, self._w, self._tmp, self._x0
+        xN, rN = x.FV().NumPy(), r.FV().NumPy()
+        a_low = s.alpha_committed
+        a_up = np.ones_like(a_low) if alpha_upper is None else np.maximum(np.minimum(alpha_upper, 1.0), a_low)
+        self.cap_binding = False
+        c = self._ncp_scale
+        dir_u = self._dir_u
+        target = np.where(dir_u, load * s._e_np, 0.0)
+        free_u = ~dir_u & self._free_base[:nu]
+        solve_time = assembly_time = 0.0
+        r_ref = 0.0
+        tol_a = self.alpha_tol * self.alpha_residual_scale
+        res_u = math.inf
+
+        def split(xv, rv):
+            """Residual norms (u part on the free dofs; alpha part of the median NCP function,
+            in units of the residual) and the bound each alpha dof is held at (0 none, -1 lower,
+            +1 upper)."""
+            a, ra = xv[nu:], rv[nu:]
+            lo, up = a - a_low, a - a_up
+            phi = np.median(np.stack([lo, up, c * ra]), axis=0)
+            held = np.where(phi == lo, -1, np.where(phi == up, 1, 0))
+            held[(held != 0) & (phi == c * ra)] = 0
+            return float(np.linalg.norm(rv[:nu][free_u])), float(np.linalg.norm(phi / c)), held
+
+        for it in range(1, self.max_iterations + 1):
+            t0 = time.perf_counter()
+            self.form.Apply(x, r)
+            tm["residual"] += time.perf_counter() - t0
+            if not np.all(np.isfinite(rN)):
+                self._scatter()
+                return NewtonResult(False, it, math.nan, solve_time, assembly_time, 0, "residual is not finite")
+            rem = np.where(dir_u, target - xN[:nu], 0.0)
+            lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
+            res_u, res_a, held = split(xN, rN)
+            reac = float(np.linalg.norm(rN[:nu][dir_u]))
+            if not lifted:
+                if r_ref == 0.0:
+                    r_ref = res_u
+                if res_u <= s.newton.rtol * max(reac, r_ref) + s.newton.atol and res_a <= tol_a:
+                    np.clip(xN[nu:], a_low, a_up, out=xN[nu:])  # held dofs sit on their bound to round-off
+                    self._scatter()
+                    s.load = load
+                    self.cap_binding = bool(np.any((held == 1) & (a_up < 1.0 - 1e-12)))
+                    return NewtonResult(True, it - 1, res_u, solve_time, assembly_time, 0)
+            # merit: each residual relative to its natural scale (units differ: N and N mm): the
+            # reaction force of the step, and the residual of a uniform unit alpha
+            scale_u = max(reac, r_ref, s.newton.atol)
+            scale_a = self.alpha_residual_scale
+            merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2
+            if _DEBUG:
+                print(f"   it {it} res_u {res_u:.3e} res_a {res_a:.3e} tol_a {tol_a:.3e} held {int(np.sum(held != 0))} lifted {lifted}")
+            # semi-smooth Newton step: held alpha dofs move onto their bound, the others and the
+            # free u dofs solve the linearised equations; the Dirichlet remainder is carried
+            t0 = time.perf_counter()
+            self.form.AssembleLinearization(x)
+            dt = time.perf_counter() - t0
+            assembly_time += dt
+            tm["assembly"] += dt
+            free = self._free_base.copy()
+            free[nu:] &= held == 0
+            a_cur = xN[nu:]
+            wN = w.FV().NumPy()
+            wN[:nu] = rem
+            wN[nu:] = np.where(held == -1, a_low - a_cur, np.where(held == 1, a_up - a_cur, 0.0))
+            fixed_step = wN.copy()
+            tmp.data = r + self.form.mat * w
+            t0 = time.perf_counter()
+            if self.linear_solver == "block-gmres":
+                t1 = self._solve_block(free, tmp, dx, t0)
+            else:
+                inv = self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
+                t1 = time.perf_counter()
+                dx.data = inv * tmp
+            dxN = dx.FV().NumPy()
+            dxN[:] = np.where(free, -dxN, fixed_step)
+            t2 = time.perf_counter()
+            tm["factorization"] += t1 - t0
+            tm["solve"] += t2 - t1
+            solve_time += t2 - t0
+            # backtracking on the merit function, guard J > 0 and finite residual
+            t0 = time.perf_counter()
+            x0.data = x
+            step = 1.0
+            accepted = False
+            for _ in range(s.newton.max_line_search):
+                xN[:] = x0.FV().NumPy() + step * dxN
+                s.u.vec.FV().NumPy()[:] = xN[:nu]
+                if s.min_J() > 0.0:
+                    self.form.Apply(x, tmp)
+                    tN = tmp.FV().NumPy()
+                    if np.all(np.isfinite(tN)):
+                        if lifted:
+                            accepted = True
+                            break
+                        rmu, rma, _ = split(xN, tN)
+                        merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2
+                        if _DEBUG:
+                            print(f"      step {step:.3g} rmu {rmu:.3e} rma {rma:.3e} merit {merit:.3e} vs {merit0:.3e}")
+                        if merit <= (1.0 - 1e-4 * step) * merit0:
+                            accepted = True
+                            break
+                step *= 0.5
+            tm["line_search"] += time.perf_counter() - t0
+            if not accepted:
+                xN[:] = x0.FV().NumPy()
+                self._scatter()
+                return NewtonResult(False, it, res_u, solve_time, assembly_time, 0,
+                                    "coupled line search failed" if not lifted else "no admissible step towards the boundary values")
+        self._scatter()
+        return NewtonResult(False, self.max_iterations, res_u, solve_time, assembly_time, 0,
+                            f"coupled Newton: no convergence in {self.max_iterations} iterations (residual {res_u:.3e} N)")
+
+    def _solve_block(self, free: np.ndarray, rhs, out, t0: float) -> float:
+        """out = A^-1 rhs on the ``free`` dofs by GMRES with the block lower-triangular
+        preconditioner [K_uu 0; K_au K_aa]; returns the time at which the factorizations ended.
+        Falls back to UMFPACK when GMRES does not reach ``gmres_tol`` in ``gmres_maxsteps``."""
+        from ngsolve.krylovspace import GMRes
+        A = self.form.mat
+        nu = self.nu
+        if self._inv_u is None:
+            fu = free.copy()
+            fu[nu:] = False
+            self._inv_u = A.Inverse(ngs.BitArray(fu.tolist()), inverse="sparsecholesky")
+        else:
+            self._inv_u.Update()
+        fa = free.copy()
+        fa[:nu] = False
+        inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
+        t1 = time.perf_counter()
+        op = _Masked(A, free)
+        pre = _BlockLower(A, self._inv_u, inv_a)
+        count = [0]
+        rhsN = rhs.FV().NumPy()
+        rhsN[~free] = 0.0
+        sol = GMRes(op, rhs, pre=pre, tol=self.gmres_tol, maxsteps=self.gmres_maxsteps, printrates=False,
+                    callback=lambda *_: count.__setitem__(0, count[0] + 1))
+        self.gmres_iterations += count[0]
+        check = rhs.CreateVector()
+        check.data = op * sol
+        if np.linalg.norm(check.FV().NumPy() - rhsN) > 1e-6 * max(np.linalg.norm(rhsN), 1e-300):
+            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
+            sol.data = inv * rhs
+        out.data = sol
+        return t1
+
+
+class _Masked(ngs.BaseMatrix):
+    """The matrix restricted to the free dofs, identity on the others."""
+
+    def __init__(self, A, free):
+        super().__init__()
+        self.A, self.free = A, free
+        self.t = A.CreateColVector()
+
+    def Height(self):
+        return self.A.height
+
+    def Width(self):
+        return self.A.width
+
+    def CreateColVector(self):
+        return self.A.CreateColVector()
+
+    def CreateRowVector(self):
+        return self.A.CreateRowVector()
+
+    def Mult(self, x, y):
+        xN = x.FV().NumPy()
+        self.t.FV().NumPy()[:] = np.where(self.free, xN, 0.0)
+        y.data = self.A * self.t
+        yN = y.FV().NumPy()
+        yN[:] = np.where(self.free, yN, xN)
+
+
+class _BlockLower(ngs.BaseMatrix):
+    """Block Gauss-Seidel preconditioner: z_u = K_uu^-1 r_u, z_a = K_aa^-1 (r_a - K_au z_u)."""
+
+    def __init__(self, A, inv_u, inv_a):
+        super().__init__()
+        self.A, self.inv_u, self.inv_a = A, inv_u, inv_a
+        self.z = A.CreateColVector()
+        self.t = A.CreateColVector()
+
+    def Height(self):
+        return self.A.height
+
+    def Width(self):
+        return self.A.width
+
+    def CreateColVector(self):
+        return self.A.CreateColVector()
+
+    def CreateRowVector(self):
+        return self.A.CreateRowVector()
+
+    def Mult(self, r, z):
+        self.z.data = self.inv_u * r
+        self.t.data = r - self.A * self.z
+        z.data = self.z + self.inv_a * self.t
