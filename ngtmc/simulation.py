@@ -117,14 +117,14 @@ class Simulation:
         True prints a progress line to stderr about every 5 s; a callable receives each row dict.
     max_steps : int
         Safety limit on accepted steps.
-    compile : True, "real" or False
+    compile : "auto", True, "real" or False
         How the energy expressions are compiled (see :class:`ngtmc.solver.Solver`).
     """
 
     def __init__(self, scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
                  scheme: str = "single-pass", staggered_tol: float = 1e-3, max_staggered: int = 30,
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
-                 max_steps: int = 100000, compile: bool | str = True, coupled: dict | None = None):
+                 max_steps: int = 100000, compile: bool | str = "auto", coupled: dict | None = None):
         if not isinstance(schedule, Schedule):
             schedule = Schedule.monotonic(float(schedule))
         if control is None:
@@ -146,7 +146,7 @@ class Simulation:
         copt = dict(coupled or {})
         self.fallback_passes = int(copt.pop("fallback_passes", 400))
         self.newton_every = int(copt.pop("newton_every", 10))
-        self.fallback = str(copt.pop("fallback", "single-pass"))
+        self.fallback = str(copt.pop("fallback", "staggered"))
         if self.fallback not in ("single-pass", "staggered", "capped"):
             raise ValueError(f"coupled fallback = {self.fallback!r} is not one of 'single-pass', 'staggered', 'capped'")
         self.damage_cap = float(copt.pop("damage_cap", 0.25))
@@ -300,13 +300,15 @@ class Simulation:
         solution, or the hybrid coupling of nearly broken elements defeats it), the step falls
         back according to ``coupled["fallback"]``:
 
-        * "single-pass" (default): the paper's single pass from the state of the last step, so the
-          crack runs through lagged steps as in the paper and the coupled Newton takes over again
-          at the next step; ``staggered_iterations`` is 1 for such a step and 0 for a coupled one;
+        * "staggered" (default): staggered passes at the same load, the coupled Newton tried
+          again after ``newton_every``, 2 ``newton_every``, 4 ``newton_every``, ... passes; the
+          step stays converged (``staggered_iterations`` counts the passes, 0 for a step of the
+          coupled Newton alone);
+        * "single-pass": the paper's single pass from the state of the last step, so the crack
+          runs through lagged steps as in the paper and the coupled Newton takes over again at the
+          next step;
         * "capped": coupled sub-steps with a capped damage increase (``_capped_substeps``), then
-          staggered passes;
-        * "staggered": staggered passes at the same load, the coupled Newton tried again after
-          ``newton_every``, 2 ``newton_every``, 4 ``newton_every``, ... passes.
+          staggered passes.
 
         Measured on the notched plate (tests/test_monolithic.py) and the three-point bending:
         docs/performance.md."""

@@ -36,6 +36,9 @@ __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
 #: Parts of the solution procedure timed in ``Solver.timings`` (seconds, accumulated): tangent
 #: assembly, residual evaluation, factorization, triangular solves, line search (trial energies,
 #: residuals and J guard), phase-field solve, history update, and recording of a step's row.
+#: Mesh size (elements) from which compile="auto" generates C++ code for the energies.
+AUTO_REAL_COMPILE_ELEMENTS = 5000
+
 TIMING_KEYS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
 
 
@@ -93,13 +96,14 @@ class Solver:
     GridFunction or None), ``rho`` (pseudo-density, L2 order 0 GridFunction: the design field),
     ``H`` (history on an IntegrationRuleSpace, MPa), ``load`` (current imposed displacement, mm).
 
-    ``compile``: True compiles the energy expressions symbolically (default), "real" generates
+    ``compile``: True compiles the energy expressions symbolically, "real" generates
     and compiles C++ code for them (about 3x faster assembly and residuals; about 25 s of
     compilation per Solver, so worth it for runs of more than a minute; falls back to True with
-    a warning where no C++ compiler is available), False evaluates them uncompiled.
+    a warning where no C++ compiler is available), False evaluates them uncompiled, "auto" (default)
+    chooses "real" on meshes of at least AUTO_REAL_COMPILE_ELEMENTS elements and True below.
     """
 
-    def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool | str = True):
+    def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool | str = "auto"):
         scene.check()
         self.scene = scene
         # a copy: the options object passed in comes back unchanged (atol is filled in below)
@@ -107,6 +111,8 @@ class Solver:
         self.mesh = mesh = scene.mesh
         self.dim = d = mesh.dim
         self.order = p = scene.displacement_order
+        if compile == "auto":  # C++ code generation pays off on larger meshes only
+            compile = "real" if scene.mesh.ne >= AUTO_REAL_COMPILE_ELEMENTS else True
         self._compile = compile
         self.thickness = scene.thickness if d == 2 else 1.0
 
@@ -300,9 +306,14 @@ class Solver:
             a += ngs.Variation(extra)
         if quadratic is None:
             return a
-        zero = ngs.GridFunction(self.fes_u)
-        quadratic.AssembleLinearization(zero.vec)
-        return _QuadraticPlus(a, quadratic.mat)
+        return _QuadraticPlus(a, quadratic, self._design_key)
+
+    def _design_key(self) -> tuple:
+        """Everything a constant tangent depends on besides u: the pseudo-density and the material
+        parameters (both change between runs of an optimisation or a finite-difference check)."""
+        rho = self.rho.vec.FV().NumPy()
+        pars = tuple(q.Get() for m in self.material_parameters.values() for q in m.values())
+        return (hash(rho.tobytes()), pars, self.gamma0.Get())
 
     def energies(self) -> dict:
         """Current energies, N mm (for the scene thickness): elastic_energy (int g Psi_bar),
@@ -601,30 +612,42 @@ class _QuadraticPlus:
     """A nonlinear energy form plus a constant quadratic one, 1/2 u.K u, with the interface of an
     NGSolve BilinearForm that the solvers use (Apply, Energy, AssembleLinearization, mat).
 
-    The regulariser of Eq. 3 is quadratic in u, so its tangent K is assembled once: at 35k dofs
-    that saves about a fifth of each tangent assembly. K must have the sparsity pattern of the
-    form's matrix (same space, volume terms only); this is checked once."""
+    The regulariser of Eq. 3 is quadratic in u, so its tangent K is assembled once (and again
+    only when ``key()`` changes: the density or a material parameter): at 35k dofs that saves
+    about a fifth of each tangent assembly. K has the sparsity pattern of the form's matrix (a
+    zero term on every element sees to that); this is checked."""
 
-    def __init__(self, form, K):
-        self.form, self.K = form, K
-        self._t = K.CreateColVector()
-        self._checked = False
+    def __init__(self, form, quadratic, key):
+        self.form, self.quadratic, self.key = form, quadratic, key
+        self._key = None
+        self._zero = ngs.GridFunction(quadratic.space).vec
+        self._t = self._zero.CreateVector()
+
+    @property
+    def K(self):
+        """The constant tangent, assembled again when the density or a parameter changed."""
+        k = self.key()
+        if k != self._key:
+            self.quadratic.AssembleLinearization(self._zero)
+            self._key = k
+        return self.quadratic.mat
 
     def Apply(self, x, y):
+        K = self.K
         self.form.Apply(x, y)
-        y.data += self.K * x
+        y.data += K * x
 
     def Energy(self, x) -> float:
-        self._t.data = self.K * x
+        K = self.K
+        self._t.data = K * x
         return self.form.Energy(x) + 0.5 * ngs.InnerProduct(x, self._t)
 
     def AssembleLinearization(self, x):
+        K = self.K
         self.form.AssembleLinearization(x)
-        if not self._checked:
-            if self.form.mat.nze != self.K.nze:
-                raise RuntimeError("the constant regulariser matrix has another sparsity pattern than the tangent")
-            self._checked = True
-        self.form.mat.AsVector().data += self.K.AsVector()
+        if self.form.mat.nze != K.nze:
+            raise RuntimeError("the constant regulariser matrix has another sparsity pattern than the tangent")
+        self.form.mat.AsVector().data += K.AsVector()
 
     @property
     def mat(self):

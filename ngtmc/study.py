@@ -27,10 +27,11 @@ __all__ = ["Case", "StudyError", "list_studies", "load_study", "normalise_name",
 #: discretisation, never the model.
 SOLVER_PARAMETERS = {
     "scheme": ("single-pass", "-", "solution scheme of a load step: 'single-pass' (paper), 'staggered' or 'monolithic'"),
-    "compile": ("real", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, 25 s to compile; "
-                             "falls back to 'symbolic' without a C++ compiler), 'symbolic' or 'none'"),
+    "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, 25 s to compile; "
+                             "falls back to 'symbolic' without a C++ compiler), 'symbolic', 'none', or 'auto' "
+                             "('real' on meshes of 5000 elements or more)"),
 }
-_COMPILE = {"real": "real", "symbolic": True, "none": False}
+_COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
 
 def simulation_options(p: dict) -> dict:

@@ -75,3 +75,31 @@ def test_each_elastic_term_owns_its_rule(solvers):
     assert err(x2, "upper", var) < 1e-12 and err(x4, "upper", var) > 1e-9
     assert err(x2, "lower", var) < 1e-12 and err(x4, "lower", var) > 1e-9
     assert err(x4, "upper", uni) < 1e-12  # order 2 everywhere: 6 points everywhere
+
+
+def test_real_compile_falls_back_cleanly_without_a_compiler(monkeypatch):
+    """compile='real' needs NGSolve's ngscxx and a C++ compiler. Without them the run must not
+    fail ('ngscxx: not found'): one RuntimeWarning, then the symbolic compilation, same residual."""
+    import sys
+    import sysconfig
+    from ngtmc import discretisation
+    monkeypatch.setattr(discretisation, "_REAL_COMPILE_FAILED", [])
+    monkeypatch.setattr(sysconfig, "get_path", lambda name: "/nonexistent")
+    monkeypatch.setattr(sys, "executable", "/nonexistent/python")
+    monkeypatch.setenv("PATH", "/nonexistent")
+    scene = two_blocks()
+    with pytest.warns(RuntimeWarning, match="compile='real' is not available"):
+        s = ngtmc.Solver(scene, compile="real")
+    ref = ngtmc.Solver(scene, compile=True)
+    for x in (s, ref):
+        x.u.Set(ngs.CF((1e-3 * ngs.x * ngs.y, -2e-3 * ngs.y)))
+    r, r_ref = s.u.vec.CreateVector(), ref.u.vec.CreateVector()
+    s.a_u.Apply(s.u.vec, r)
+    ref.a_u.Apply(ref.u.vec, r_ref)
+    np.testing.assert_allclose(r.FV().NumPy(), r_ref.FV().NumPy(), rtol=1e-12, atol=1e-15)
+
+
+def test_auto_compile_generates_code_only_for_large_meshes():
+    from ngtmc.solver import AUTO_REAL_COMPILE_ELEMENTS
+    s = ngtmc.Solver(two_blocks())
+    assert s.mesh.ne < AUTO_REAL_COMPILE_ELEMENTS and s._compile is True
