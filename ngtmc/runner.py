@@ -38,6 +38,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from .scene import _names
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
 
 __all__ = ["run_study", "default_output", "HISTORY_COLUMNS", "case_results", "write_atomic"]
@@ -167,7 +168,8 @@ def _mesh_info(solver) -> dict:
     nd = solver.ndof
     return {"n_elements": int(mesh.ne), "n_vertices": int(mesh.nv), "ndof_u": int(nd["u"]),
             "ndof_alpha": int(nd["alpha"]), "h_min": float(np.min(h)), "h_max": float(np.max(h)),
-            "displacement_order": int(solver.order)}
+            "displacement_order": (f"{solver.order} in {', '.join(_names(solver.scene.regulariser.regions))}, 1 elsewhere"
+                                   if solver._variable_order else int(solver.order))}
 
 
 def case_results(rows: pd.DataFrame) -> dict:
