@@ -954,6 +954,27 @@ def speed_error_rows(entries: list[dict], finest: dict | None = None) -> list[di
     return entries
 
 
+#: Parts of the time split shown in the report, in order (keys of ngtmc.solver.TIMING_KEYS).
+TIME_SPLIT_PARTS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
+
+
+def time_split_rows(meta: dict, history: pd.DataFrame, cases: list[dict]) -> list[dict]:
+    """Per case with a recorded ``time_split_s``: Newton iterations, ms per iteration and the
+    share of the case's wall time spent in each part (%), plus the rest (meshing, output, ...)."""
+    rows = []
+    for c in cases:
+        res = (meta.get("results") or {}).get(c["name"]) or {}
+        split = res.get("time_split_s")
+        nums = case_numbers(meta, history, c["name"])
+        wall, its = nums.get("wall_time_s"), nums.get("newton_iterations")
+        if not isinstance(split, dict) or not _finite(wall) or not wall or not its:
+            continue
+        parts = [(k, 100.0 * float(split.get(k, 0.0)) / float(wall)) for k in TIME_SPLIT_PARTS]
+        rows.append({"label": c["label"], "newton": int(its), "ms_per_it": 1000.0 * float(wall) / int(its),
+                     "wall_time_s": float(wall), "parts": parts, "other": max(0.0, 100.0 - sum(v for _, v in parts))})
+    return rows
+
+
 def _fig_speed_error(entries: list[dict], title: str, size_label: str):
     pts = sorted((e for e in entries if _finite(e.get("wall_time_s"))),
                  key=lambda e: float(e["wall_time_s"]))
@@ -1224,6 +1245,7 @@ def render_report(run_dir, output=None) -> Path:
         "key_rows": key_number_rows(meta, history), "ref_peaks": ref_peaks,
         "case_nums": case_nums, "interp": interp,
         "speed": speed, "speed_meaningful": speed_meaningful,
+        "time_split": time_split_rows(meta, history, cases),
         "mesh_info": mesh_info, "has_snapshots": bool(mesh_info),
         "fig_ids": list(figs), "mesh_plot_ids": mesh_plot_ids,
         "fig_json": _script_json(_clean(figs)), "mesh_json": _script_json(_clean(meshes)),

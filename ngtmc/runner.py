@@ -608,6 +608,8 @@ class _Run:
             res["status"] = status
             # CPU time of all threads of this process (wall time inflates when the machine is shared)
             res["cpu_time_s"] = cm["cpu_time_s"] = time.process_time() - cpu0
+            # where the time went (s) since this process started the case (see ngtmc.solver.TIMING_KEYS)
+            res["time_split_s"] = {k: float(v) for k, v in sim.solver.timings.items()}
             if error:
                 res["error"] = error
             self.results[case.name] = res

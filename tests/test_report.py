@@ -308,3 +308,26 @@ def test_speed_error_honours_reference_case(tpb_run):
     entries = report._run_speed_entries(meta, history, report._case_list(meta))
     finest = [e for e in entries if e["finest"]]
     assert [e["label"] for e in finest] == ["du_max = 2e-3 mm"]
+
+
+def test_time_split_table():
+    """Each case with a recorded time split gets a row: ms per Newton iteration and the share of
+    its wall time per part, the rest as 'other'."""
+    import pandas as pd
+    meta = {"cases": [{"name": "main", "label": "main case"}],
+            "results": {"main": {"wall_time_s": 100.0, "newton_iterations": 400, "steps": 200,
+                                 "time_split_s": {"assembly": 45.0, "residual": 10.0, "factorization": 5.0,
+                                                  "solve": 1.0, "line_search": 9.0, "phase_field": 2.0,
+                                                  "history": 3.0, "record": 5.0}}}}
+    history = pd.DataFrame({"case": ["main"] * 3, "step": [0, 1, 2], "load": [0.0, 0.1, 0.2],
+                            "force": [0.0, 1.0, 2.0], "newton_iterations": [0, 200, 200], "cutbacks": [0, 0, 0],
+                            "wall_time": [0.0, 50.0, 100.0], "solve_time": [0.0, 1.0, 1.0],
+                            "fracture_energy": [0.0, 0.0, 0.0], "max_alpha": [0.0, 0.0, 0.0]})
+    rows = report.time_split_rows(meta, history, meta["cases"])
+    assert len(rows) == 1
+    r = rows[0]
+    assert r["ms_per_it"] == pytest.approx(250.0) and r["newton"] == 400
+    assert dict(r["parts"])["assembly"] == pytest.approx(45.0)
+    assert r["other"] == pytest.approx(20.0)
+    meta["results"]["main"].pop("time_split_s")
+    assert report.time_split_rows(meta, history, meta["cases"]) == []
