@@ -283,13 +283,12 @@ class CoupledNewton:
         return t1
 
 
-class _Masked(ngs.BaseMatrix):
-    """The matrix restricted to the free dofs, identity on the others."""
+class _SquareOperator(ngs.BaseMatrix):
+    """An operator with the shape and vectors of the square matrix A."""
 
-    def __init__(self, A, free):
+    def __init__(self, A):
         super().__init__()
-        self.A, self.free = A, free
-        self.t = A.CreateColVector()
+        self.A = A
 
     def Height(self):
         return self.A.height
@@ -302,6 +301,15 @@ class _Masked(ngs.BaseMatrix):
 
     def CreateRowVector(self):
         return self.A.CreateRowVector()
+
+
+class _Masked(_SquareOperator):
+    """The matrix restricted to the free dofs, identity on the others."""
+
+    def __init__(self, A, free):
+        super().__init__(A)
+        self.free = free
+        self.t = A.CreateColVector()
 
     def Mult(self, x, y):
         xN = x.FV().NumPy()
@@ -311,26 +319,14 @@ class _Masked(ngs.BaseMatrix):
         yN[:] = np.where(self.free, yN, xN)
 
 
-class _BlockLower(ngs.BaseMatrix):
+class _BlockLower(_SquareOperator):
     """Block Gauss-Seidel preconditioner: z_u = K_uu^-1 r_u, z_a = K_aa^-1 (r_a - K_au z_u)."""
 
     def __init__(self, A, inv_u, inv_a):
-        super().__init__()
-        self.A, self.inv_u, self.inv_a = A, inv_u, inv_a
+        super().__init__(A)
+        self.inv_u, self.inv_a = inv_u, inv_a
         self.z = A.CreateColVector()
         self.t = A.CreateColVector()
-
-    def Height(self):
-        return self.A.height
-
-    def Width(self):
-        return self.A.width
-
-    def CreateColVector(self):
-        return self.A.CreateColVector()
-
-    def CreateRowVector(self):
-        return self.A.CreateRowVector()
 
     def Mult(self, r, z):
         self.z.data = self.inv_u * r
