@@ -35,7 +35,6 @@ from .materials import deformation_gradient, psi_bar, psi_plus
 from .solver import NewtonResult
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
-_DEBUG = False
 
 #: Linear solvers of the coupled tangent: "block-gmres" (GMRES preconditioned by the block lower
 #: triangle, with sparse Cholesky factors of the symmetric u-u and alpha-alpha blocks; the u-u
@@ -62,7 +61,6 @@ class CoupledNewton:
         self.gmres_tol = float(gmres_tol)
         self.gmres_maxsteps = int(gmres_maxsteps)
         self._inv_u = None
-        self.gmres_iterations = 0
         self.s = s = solver
         self.alpha_tol = float(alpha_tol)
         self.max_iterations = int(max_iterations)
@@ -71,7 +69,6 @@ class CoupledNewton:
         self.nu = s.fes_u.ndof
         self.x = ngs.GridFunction(X)
         self._free_base = np.array(list(X.FreeDofs()), dtype=bool)
-        self._dir_u = s._dir_np
         self.form = self._build_form()
         self._r = self.x.vec.CreateVector()
         self._dx = self.x.vec.CreateVector()
@@ -142,7 +139,7 @@ class CoupledNewton:
         a_up = np.ones_like(a_low) if alpha_upper is None else np.maximum(np.minimum(alpha_upper, 1.0), a_low)
         self.cap_binding = False
         c = self._ncp_scale
-        dir_u = self._dir_u
+        dir_u = s._dir_np
         target = np.where(dir_u, load * s._e_np, 0.0)
         free_u = ~dir_u & self._free_base[:nu]
         solve_time = assembly_time = 0.0
@@ -186,8 +183,6 @@ class CoupledNewton:
             scale_u = max(reac, r_ref, s.newton.atol)
             scale_a = self.alpha_residual_scale
             merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2
-            if _DEBUG:
-                print(f"   it {it} res_u {res_u:.3e} res_a {res_a:.3e} tol_a {tol_a:.3e} held {int(np.sum(held != 0))} lifted {lifted}")
             # semi-smooth Newton step: held alpha dofs move onto their bound, the others and the
             # free u dofs solve the linearised equations; the Dirichlet remainder is carried
             t0 = time.perf_counter()
@@ -233,8 +228,6 @@ class CoupledNewton:
                             break
                         rmu, rma, _ = split(xN, tN)
                         merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2
-                        if _DEBUG:
-                            print(f"      step {step:.3g} rmu {rmu:.3e} rma {rma:.3e} merit {merit:.3e} vs {merit0:.3e}")
                         if merit <= (1.0 - 1e-4 * step) * merit0:
                             accepted = True
                             break
@@ -268,12 +261,9 @@ class CoupledNewton:
         t1 = time.perf_counter()
         op = _Masked(A, free)
         pre = _BlockLower(A, self._inv_u, inv_a)
-        count = [0]
         rhsN = rhs.FV().NumPy()
         rhsN[~free] = 0.0
-        sol = GMRes(op, rhs, pre=pre, tol=self.gmres_tol, maxsteps=self.gmres_maxsteps, printrates=False,
-                    callback=lambda *_: count.__setitem__(0, count[0] + 1))
-        self.gmres_iterations += count[0]
+        sol = GMRes(op, rhs, pre=pre, tol=self.gmres_tol, maxsteps=self.gmres_maxsteps, printrates=False)
         check = rhs.CreateVector()
         check.data = op * sol
         if np.linalg.norm(check.FV().NumPy() - rhsN) > 1e-6 * max(np.linalg.norm(rhsN), 1e-300):
