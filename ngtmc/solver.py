@@ -186,9 +186,9 @@ class Solver:
             high = {r for r in regions if re.fullmatch(_regex(_names(scene.regulariser.regions)), r)}
         self._high_re = _regex(sorted(r for r in others if r in high))
         self._low_re = _regex(sorted(r for r in others if r not in high))
-        p_hist = p if (p >= 2 and any(r in high for r in regions if re.fullmatch(self._frac_re or "$^", r))) else 1
-        if not self._variable_order:
-            p_hist = p
+        # the history lives at the order of the fracture regions' displacement
+        frac_high = bool(frac) and any(r in high for r in regions if re.fullmatch(self._frac_re, r))
+        p_hist = p if (frac_high or not self._variable_order) else 1
 
         # ------------------------------------------------------------ history and phase field
         # history points: the rule of order 2 p_hist, p_hist the displacement order of the
