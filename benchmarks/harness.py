@@ -202,23 +202,15 @@ def format_table(records, markdown: bool = False) -> str:
     return "\n".join([line(head), line(["-" * w for w in widths])] + [line(row) for row in rows])
 
 def jsonable(x):
-    """``x`` with numpy scalars/arrays, dataclasses and non-finite floats made JSON-able (NaN -> None)."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return jsonable(x.tolist())
+    """``x`` in plain JSON types by the run folders' conversion (numpy values, NaN -> None), with
+    dataclasses (e.g. NewtonOptions) as dicts naming their type and other objects as their repr."""
+    from ngtmc.runner import _jsonable
+    return _jsonable(x, other=_json_other)
+
+
+def _json_other(x):
     if dataclasses.is_dataclass(x) and not isinstance(x, type):
         return {"type": type(x).__name__, **jsonable(dataclasses.asdict(x))}
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if x is None or isinstance(x, str):
-        return x
     return repr(x)
 
 # ====================================================================== one run

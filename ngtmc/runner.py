@@ -85,14 +85,14 @@ def _write_npz(path, arrays: dict):
     write_atomic(path, buf.getvalue())
 
 
-def _jsonable(x):
-    """Plain JSON types; non-finite floats become null."""
+def _jsonable(x, other=str):
+    """Plain JSON types; non-finite floats become null; any other object becomes ``other(x)``."""
     if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
+        return {str(k): _jsonable(v, other) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
+        return [_jsonable(v, other) for v in x]
     if isinstance(x, np.ndarray):
-        return [_jsonable(v) for v in x.tolist()]
+        return [_jsonable(v, other) for v in x.tolist()]
     if isinstance(x, (np.integer,)):
         return int(x)
     if isinstance(x, (bool, np.bool_)):
@@ -102,7 +102,7 @@ def _jsonable(x):
         return x if math.isfinite(x) else None
     if x is None or isinstance(x, (int, str)):
         return x
-    return str(x)
+    return other(x)
 
 
 # ====================================================================== metadata pieces
