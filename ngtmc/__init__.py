@@ -15,14 +15,14 @@ from .materials import Material
 from .scene import DisplacementLoad, Regulariser, ResolutionWarning, Scene, Support
 from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate
 from .solver import NewtonOptions, Solver
-from .stepping import AdaptiveStepControl, Schedule
+from .stepping import AdaptiveStepControl, ChangeControl, Schedule
 
 __version__ = "0.1.0"
 
 __all__ = [
     "Material", "Scene", "Support", "DisplacementLoad", "Regulariser", "ResolutionWarning",
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
-    "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "__version__",
+    "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "ChangeControl", "__version__",
 ]
 
 from .study import Case, list_studies, load_study  # noqa: E402

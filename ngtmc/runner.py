@@ -492,6 +492,7 @@ class _Run:
             arrays["scalars"] = np.array([state["t"], state["step"], state["last_delta_wf"], state["wf_prev"],
                                           state["elapsed"]], dtype=float)
             arrays["control"] = np.array(json.dumps(state["control"]))
+            arrays["last_step"] = np.array(json.dumps(state.get("last_step")))
         if snaps is not None:
             for k, v in snaps.state().items():
                 arrays["snap__" + k] = v
@@ -512,7 +513,8 @@ class _Run:
             ck["state"] = {"solver": {k[len("solver__"):]: v for k, v in d.items() if k.startswith("solver__")},
                            "t": float(sc[0]), "step": int(sc[1]), "last_delta_wf": float(sc[2]),
                            "wf_prev": float(sc[3]), "elapsed": float(sc[4]),
-                           "control": json.loads(str(d["control"])), "rows": ck["rows"]}
+                           "control": json.loads(str(d["control"])), "rows": ck["rows"],
+                           "last_step": json.loads(str(d["last_step"])) if "last_step" in d else None}
         ck["snap"] = {k[len("snap__"):]: v for k, v in d.items() if k.startswith("snap__")}
         ck["snaparr"] = {k[len("snaparr__"):]: v for k, v in d.items() if k.startswith("snaparr__")}
         return ck
