@@ -136,6 +136,11 @@ def _load(run_dir, with_snapshots: bool = True):
             meta[key] = empty()
     meta.setdefault("study", run_dir.name)
     meta.setdefault("status", "unknown")
+    # a "running" status whose process is gone is an interrupted (resumable) run
+    from .runfiles import effective_status
+    meta["status"], note = effective_status(meta)
+    if note:
+        meta["status_note"] = note
     meta.setdefault("force_unit", meta["units"].get("force", "N"))
 
     hist_path = run_dir / "history.csv"

@@ -22,22 +22,23 @@ gets status ``"interrupted"``.
 from __future__ import annotations
 
 import datetime as _dt
-import io
 import json
-import math
 import os
 from pathlib import Path
 import platform
 import subprocess
 import sys
-import tempfile
 import time
+import warnings
 from types import ModuleType
 from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
 
+from .runfiles import (SCHEMA_VERSION, CheckpointStore, CheckpointWarning, effective_status, jsonable,
+                       parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
+                       write_atomic, write_json, write_npz)
 from .scene import _names
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
 
@@ -48,61 +49,11 @@ HISTORY_COLUMNS = ["case", "step", "load", "force", "fracture_energy", "dissipat
                    "regularisation_energy", "max_alpha", "min_J", "newton_iterations", "staggered_iterations",
                    "cutbacks", "alpha_projected", "step_size", "wall_time", "solve_time", "assembly_time"]
 
-_UMASK = os.umask(0)
-os.umask(_UMASK)
-
 _UNITS = {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"}
 
-
-# ====================================================================== atomic file output
-def write_atomic(path, data: bytes | str):
-    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix="." + path.name + ".", suffix=".tmp")
-    try:
-        os.chmod(tmp, 0o666 & ~_UMASK)     # mkstemp creates 0600; give the file the usual permissions
-        with os.fdopen(fd, "wb") as f:
-            f.write(data.encode() if isinstance(data, str) else data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _write_json(path, obj):
-    write_atomic(path, json.dumps(_jsonable(obj), indent=2, allow_nan=False) + "\n")
-
-
-def _write_npz(path, arrays: dict):
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    write_atomic(path, buf.getvalue())
-
-
-def _jsonable(x, other=str):
-    """Plain JSON types; non-finite floats become null; any other object becomes ``other(x)``."""
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v, other) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v, other) for v in x]
-    if isinstance(x, np.ndarray):
-        return [_jsonable(v, other) for v in x.tolist()]
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (float, np.floating)):
-        x = float(x)
-        return x if math.isfinite(x) else None
-    if x is None or isinstance(x, (int, str)):
-        return x
-    return other(x)
+_jsonable = jsonable            # kept for the callers of the former private names
+_write_json = write_json
+_write_npz = write_npz
 
 
 # ====================================================================== metadata pieces
@@ -377,7 +328,10 @@ class _Run:
         self.checkpoint_seconds = float(checkpoint_seconds)
         self.callbacks = list(callbacks or [])
         self.vtk = vtk
-        self.cases: list[Case] = list(mod.cases(p))
+        try:
+            self.cases: list[Case] = list(mod.cases(p))
+        except (ValueError, TypeError) as e:     # bad parameters, refused before any folder exists
+            raise StudyError(f"study {mod.NAME!r} cannot build its cases: {e}") from e
         names = [c.name for c in self.cases]
         if len(set(names)) != len(names):
             raise StudyError(f"study {mod.NAME!r}: case names are not unique: {names}")
@@ -392,6 +346,9 @@ class _Run:
         self.t0 = time.perf_counter()
         self.wall_before = 0.0
         self.created = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+        self.hash = parameters_hash(p)
+        self.store = CheckpointStore(out / "checkpoint")
+        self.resume_from: dict[str, dict] = {}   # case -> checkpoint to continue from (see prepare_resume)
 
     # ------------------------------------------------------------ files
     @property
@@ -436,6 +393,7 @@ class _Run:
             "study": mod.NAME,
             "title": getattr(mod, "TITLE", mod.NAME),
             "summary_text": getattr(mod, "SUMMARY", ""),
+            "schema_version": SCHEMA_VERSION,
             "resolution": self.resolution,
             "created": self.created,
             "status": self.status,
@@ -446,6 +404,7 @@ class _Run:
             "force_unit": "N/mm" if dim == 2 else "N",
             "parameters": _parameter_table(mod, p),
             "overrides": self.overrides,
+            "parameters_hash": self.hash,
             "mesh": {k: v for k, v in (self.mesh or {}).items() if k != "dim"},
             "wall_time_s": self.wall_time(),
             "cases": [dict(name=c.name, label=c.label, parameters=c.parameters, **self.case_meta.get(c.name, {}))
@@ -457,6 +416,7 @@ class _Run:
             "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else None,
             "host": {"platform": platform.platform(), "cpu_count": os.cpu_count(),
                      "threads": _threads()},
+            "process": process_info(),
         }
         if self.error:
             meta["error"] = self.error
@@ -483,9 +443,10 @@ class _Run:
 
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, case: Case, state: dict, snaps: _Snapshots | None, done: bool):
-        arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(_jsonable(state["rows"]))),
-                  "results": np.array(json.dumps(_jsonable(self.results.get(case.name, {})))),
-                  "case_meta": np.array(json.dumps(_jsonable(self.case_meta.get(case.name, {}))))}
+        arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(jsonable(state["rows"]))),
+                  "results": np.array(json.dumps(jsonable(self.results.get(case.name, {})))),
+                  "case_meta": np.array(json.dumps(jsonable(self.case_meta.get(case.name, {})))),
+                  "parameters_hash": np.array(self.hash)}
         if not done:
             for k, v in state["solver"].items():
                 arrays["solver__" + k] = np.asarray(v)
@@ -497,16 +458,13 @@ class _Run:
                 arrays["snap__" + k] = v
             for k, v in snaps.arrays(case.name).items():
                 arrays["snaparr__" + k] = v
-        _write_npz(self.ckpt_dir / f"{case.name}.npz", arrays)
+        self.store.save(case.name, arrays)
 
-    def load_checkpoint(self, case: Case) -> dict | None:
-        f = self.ckpt_dir / f"{case.name}.npz"
-        if not f.exists():
-            return None
-        with np.load(f, allow_pickle=False) as z:
-            d = {k: z[k] for k in z.files}
+    @staticmethod
+    def _decode_checkpoint(d: dict) -> dict:
         ck = {"done": bool(d["done"]), "rows": json.loads(str(d["rows"])),
-              "results": json.loads(str(d["results"])), "case_meta": json.loads(str(d["case_meta"]))}
+              "results": json.loads(str(d["results"])), "case_meta": json.loads(str(d["case_meta"])),
+              "parameters_hash": str(d["parameters_hash"]) if "parameters_hash" in d else None}
         if not ck["done"]:
             sc = d["scalars"]
             ck["state"] = {"solver": {k[len("solver__"):]: v for k, v in d.items() if k.startswith("solver__")},
@@ -517,20 +475,103 @@ class _Run:
         ck["snaparr"] = {k[len("snaparr__"):]: v for k, v in d.items() if k.startswith("snaparr__")}
         return ck
 
+    def load_checkpoint(self, case: Case) -> dict | None:
+        """The newest readable checkpoint of ``case`` (see CheckpointStore.load), or None. Raises
+        StudyError when it was computed with other parameters than this run."""
+        ck = self.store.load(case.name, self._decode_checkpoint)
+        if ck is not None and ck["parameters_hash"] not in (None, self.hash):
+            raise StudyError(f"cannot resume {self.out}: checkpoint of case {case.name!r} was computed with other "
+                             f"parameters ({ck['parameters_hash']}) than this run ({self.hash}); start a new run")
+        return ck
+
+    def _adopt_completed(self, case: Case, ck: dict):
+        self.rows[case.name] = ck["rows"]
+        self.results[case.name] = ck["results"]
+        self.case_meta[case.name] = ck["case_meta"]
+        if ck["snaparr"]:
+            self.snaps[case.name] = ck["snaparr"]
+        if self.mesh is None and ck["case_meta"].get("mesh"):
+            self.mesh = dict(ck["case_meta"]["mesh"])
+
+    def prepare_resume(self, meta: dict | None):
+        """Read every case's checkpoint before anything is solved or written: completed cases are
+        taken over, interrupted ones continue from their state. A case without a readable
+        checkpoint that the recorded metadata calls completed is taken from history.csv (and
+        snapshots.npz); any other case without one is re-run from the start."""
+        recorded = (meta or {}).get("results") or {}
+        old_hist = old_snaps = None
+        for case in self.cases:
+            ck = self.load_checkpoint(case)
+            if ck is not None and ck["done"]:
+                self._adopt_completed(case, ck)
+            elif ck is not None:
+                self.resume_from[case.name] = ck
+                # kept in the files until the case goes on, so that no failure before then loses them
+                self.rows[case.name] = ck["rows"]
+                self.results[case.name] = ck["results"]
+                self.case_meta[case.name] = ck["case_meta"]
+                if ck["snaparr"]:
+                    self.snaps[case.name] = ck["snaparr"]
+            elif (recorded.get(case.name) or {}).get("status") == "completed":
+                if old_hist is None:
+                    old_hist, old_snaps = self._recorded_files()
+                rows = old_hist[old_hist["case"].astype(str) == case.name] if len(old_hist) else old_hist
+                if len(rows):
+                    cm = next((dict(c) for c in meta.get("cases", []) if c.get("name") == case.name), {})
+                    for k in ("name", "label", "parameters"):
+                        cm.pop(k, None)
+                    ck = {"rows": [{k: v for k, v in r.items() if not (isinstance(v, float) and np.isnan(v))}
+                                   for r in rows.drop(columns="case").to_dict("records")],
+                          "results": recorded[case.name], "case_meta": cm,
+                          "snaparr": {k: v for k, v in old_snaps.items() if k.startswith(case.name + "__")}}
+                    self._adopt_completed(case, ck)
+                    self.save_checkpoint(case, {"rows": ck["rows"]}, None, done=True)
+                    self.progress.say(f"case {case.name}: no readable checkpoint; its completed results are "
+                                      "taken from history.csv and metadata.json")
+
+    def _recorded_files(self):
+        try:
+            hist = pd.read_csv(self.out / "history.csv")
+        except Exception:
+            hist = pd.DataFrame()
+        snaps = {}
+        try:
+            with np.load(self.out / "snapshots.npz", allow_pickle=False) as z:
+                snaps = {k: z[k] for k in z.files}
+        except Exception:
+            pass
+        return hist, snaps
+
+    def validate(self):
+        """Check every case still to be computed (scene, schedule, control, options) before any folder
+        is created or any step solved; raise StudyError naming the case and the parameter."""
+        import inspect
+        from .simulation import Simulation
+        from .stepping import AdaptiveStepControl, Schedule
+        allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
+        for case in self.cases:
+            if case.name in self.results or case.run is not None:
+                continue
+            try:
+                if case.control is not None and not isinstance(case.control, AdaptiveStepControl):
+                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl or None, got "
+                                    f"{type(case.control).__name__} {case.control!r}")
+                if not isinstance(case.schedule, Schedule):
+                    case.schedule = Schedule.monotonic(float(case.schedule))
+                bad = sorted(set(case.options or {}) - allowed)
+                if bad:
+                    raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
+                case.build_scene().check()
+            except (ValueError, TypeError) as e:
+                raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
+
     # ------------------------------------------------------------ one case
     def run_case(self, k: int, case: Case, resume: bool):
         import ngsolve as ngs
         from .simulation import Simulation, StepFailure
 
-        ck = self.load_checkpoint(case) if resume else None
-        if ck is not None and ck["done"]:
-            self.rows[case.name] = ck["rows"]
-            self.results[case.name] = ck["results"]
-            self.case_meta[case.name] = ck["case_meta"]
-            if ck["snaparr"]:
-                self.snaps[case.name] = ck["snaparr"]
-            if self.mesh is None and ck["case_meta"].get("mesh"):
-                self.mesh = dict(ck["case_meta"]["mesh"])
+        ck = self.resume_from.pop(case.name, None)
+        if case.name in self.results and self.results[case.name].get("status") == "completed":
             self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: already complete (checkpoint)")
             return
 
@@ -637,16 +678,15 @@ class _Run:
         self.write_all()
 
     # ------------------------------------------------------------ whole run
-    def run(self, resume: bool):
-        if resume:
-            meta_f = self.out / "metadata.json"
-            if meta_f.exists():
-                try:
-                    old = json.loads(meta_f.read_text())
-                    self.wall_before = float(old.get("wall_time_s") or 0.0)
-                    self.created = old.get("created", self.created)
-                except Exception:
-                    pass
+    def run(self, resume: bool, meta: dict | None = None):
+        """Compute every case not taken over by :meth:`prepare_resume`; ``meta``: the recorded
+        metadata of the run to resume (its creation date and wall time carry over)."""
+        if resume and meta:
+            try:
+                self.wall_before = float(meta.get("wall_time_s") or 0.0)
+                self.created = meta.get("created", self.created)
+            except (TypeError, ValueError):
+                pass
         self.out.mkdir(parents=True, exist_ok=True)
         self.write_metadata()
         try:
@@ -711,29 +751,51 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     Raises StepFailure (after writing the history and metadata with status "failed") when a step
     fails at the minimum increment.
     """
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
+                                or threads < 1):
+        raise StudyError(f"threads = {threads!r} is not allowed: give an integer >= 1 (NGSolve threads), "
+                         "or None to leave the thread count as it is")
     mod = name if isinstance(name, ModuleType) else load_study(name)
-    res, p = study_parameters(mod, resolution, overrides)
-    if output is None:
-        if resume:
-            output = _latest_run(mod.NAME, res)
+    meta = None
+    if resume:
+        if output is None:
+            output = _latest_run(mod.NAME, resolution or getattr(mod, "DEFAULT_RESOLUTION", "quick"))
             if output is None:
-                raise StudyError(f"resume=True but no run folder reports/{mod.NAME}-{res}* with a checkpoint exists; "
-                                 "give output=")
-        else:
-            output = default_output(mod.NAME, res)
-    out = Path(output)
-    if resume and not (out / "checkpoint").is_dir():
-        raise StudyError(f"resume=True but {out} has no checkpoint/ folder")
-    if not resume and out.exists() and (out / "history.csv").exists():
-        raise StudyError(f"{out} holds a run already: choose another output, or resume=True to continue it")
-    run = _Run(mod, res, p, out, overrides, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+                raise StudyError(f"resume=True but no run folder reports/{mod.NAME}-"
+                                 f"{resolution or getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}* with a checkpoint "
+                                 "exists; give output=")
+        out = Path(output)
+        if not (out / "checkpoint").is_dir():
+            raise StudyError(f"resume=True but {out} has no checkpoint/ folder")
+        meta = read_metadata(out)
+        if meta is not None:
+            status, note = effective_status(meta)
+            proc = meta.get("process") or {}
+            if status == "running" and note and "alive" in note and proc.get("pid") != os.getpid():
+                raise StudyError(f"cannot resume {out}: it is still running ({note})")
+        res, typed, p = resume_parameters(meta, mod, resolution, overrides, out)
+    else:
+        res, p = study_parameters(mod, resolution, overrides)
+        typed = typed_overrides(p, overrides)
+        out = Path(output) if output is not None else default_output(mod.NAME, res)
+        if out.exists() and (out / "history.csv").exists():
+            old = read_metadata(out) or {}
+            status, note = effective_status(old) if old else ("unknown", None)
+            raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
+                             "another output, or resume=True / --resume to continue it")
+    run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+    if resume:
+        if meta is not None and meta.get("status") == "running":
+            run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")
+        run.prepare_resume(meta)
+    run.validate()     # bad input is refused here, before any folder is created or any step solved
     import ngsolve as ngs
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
     try:
         with _terminate_as_interrupt(), ngs.TaskManager():
-            run.run(resume)
+            run.run(resume, meta)
     except BaseException:
         # a failed or interrupted run still gets its report (with a status banner): nothing is lost
         if report or report is None:

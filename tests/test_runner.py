@@ -36,7 +36,7 @@ def _tiny_scene(p):
                        fracture_regions="bar", gamma0=1e-6, name="tiny")
 
 
-def tiny_study(final_load=0.02, du_min=1e-5, options=None):
+def tiny_study(final_load=0.02, du_min=1e-5, options=None, names=("main",)):
     mod = types.ModuleType("tiny_study")
     mod.NAME = "tiny"
     mod.TITLE = "Tiny notched bar"
@@ -49,10 +49,11 @@ def tiny_study(final_load=0.02, du_min=1e-5, options=None):
     mod.DEFAULT_RESOLUTION = "quick"
 
     def cases(p):
-        return [Case(name="main", label="tiny", scene=lambda: _tiny_scene(p),
+        return [Case(name=name, label="tiny", scene=lambda: _tiny_scene(p),
                      schedule=ngtmc.Schedule.monotonic(float(p["final_load"])),
                      control=ngtmc.AdaptiveStepControl(du_max=float(p["du_max"]), k_u=float(p["k_u"]), du_min=du_min),
-                     snapshot_loads=[0.005, 0.01], parameters={"k_u": p["k_u"]}, options=dict(options or {}))]
+                     snapshot_loads=[0.005, 0.01], parameters={"k_u": p["k_u"]}, options=dict(options or {}))
+                for name in names]
 
     mod.cases = cases
     mod.references = lambda p: [{"label": "line", "source": "none", "kind": "curve", "x": [0, 1], "y": [0, 1],
