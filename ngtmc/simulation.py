@@ -125,8 +125,16 @@ class Simulation:
                  scheme: str = "single-pass", staggered_tol: float = 1e-3, max_staggered: int = 30,
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
                  max_steps: int = 100000, compile: bool | str = "auto", coupled: dict | None = None):
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be an ngtmc.Scene, got {type(scene).__name__}")
         if not isinstance(schedule, Schedule):
+            from .materials import check_number
+            check_number("schedule (a Schedule, or the final load)", schedule, "mm")
             schedule = Schedule.monotonic(float(schedule))
+        if control is not None and not isinstance(control, AdaptiveStepControl):
+            hint = (f"; write AdaptiveStepControl(**{control!r})" if isinstance(control, dict) else "")
+            raise TypeError(f"control must be an ngtmc.AdaptiveStepControl (du_max mm, k_u 1/N, du_min mm, n_s), "
+                            f"or None for constant steps; got {type(control).__name__}{hint}")
         if control is None:
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
         if scheme not in SCHEMES:
