@@ -262,3 +262,24 @@ def test_sigterm_is_recorded_as_interrupted_and_resumable(full_run, tmp_path):
     run_study(tiny_study(), output=out, report=False, progress=False, threads=1, resume=True, vtk=False)
     pd.testing.assert_frame_equal(_physics(pd.read_csv(full_run / "history.csv")),
                                   _physics(pd.read_csv(out / "history.csv")), rtol=1e-9, atol=1e-12)
+
+
+def test_cli_version_and_show(capsys):
+    from ngtmc.cli import main
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"ngtmc {ngtmc.__version__}"
+    assert main(["show", "three-point-bending"]) == 0
+    out = capsys.readouterr().out
+    mod = load_study("three_point_bending")
+    assert "Three-point bending" in out and "default quick" in out
+    lines = out.splitlines()
+    e_line = next(line for line in lines if line.split()[:1] == ["E"])
+    assert e_line.split()[1:3] == ["20800", "MPa"]                 # default and unit
+    header = next(line for line in lines if line.split()[:2] == ["key", "unit"])
+    assert header.split()[2:5] == ["quick", "medium", "paper"]
+    h_band = next(line for line in lines if line.split()[:1] == ["h_band"]).split()
+    assert h_band[1] == "mm" and [float(x) for x in h_band[2:5]] == [mod.RESOLUTIONS[r]["h_band"]
+                                                                      for r in ("quick", "medium", "paper")]
+    assert main(["show", "no-such-study"]) == 2
+    assert "valid studies" in capsys.readouterr().err
