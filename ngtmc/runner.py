@@ -12,8 +12,11 @@ Every file is written to a temporary file and moved into place with ``os.replace
 leaves a truncated history or metadata behind. Checkpoints (``checkpoint/<case>.npz``: the
 Simulation state, the history rows and the snapshots of that case) are written every
 ``checkpoint_every`` accepted steps or ``checkpoint_seconds`` seconds, whichever comes first, and
-when a run is interrupted or fails. ``run_study(..., resume=True)`` continues from them and gives
-the same history as an uninterrupted run (wall and solve times aside).
+when a run is interrupted or fails; each case keeps two generations. ``run_study(...,
+resume=True)`` continues from them and gives the same history as an uninterrupted run (wall and
+solve times aside). A resume takes the recorded overrides and refuses other ones, skips an
+unreadable checkpoint (named in a warning) for the older generation, and never rewrites the rows
+of a completed case (see :mod:`ngtmc.runfiles`).
 
 A failed run (:class:`ngtmc.StepFailure`) still writes its history and metadata, with status
 ``"failed"`` and the error message, and then re-raises. An interrupted run (KeyboardInterrupt)
@@ -29,17 +32,17 @@ import platform
 import subprocess
 import sys
 import time
-import warnings
 from types import ModuleType
 from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
 
-from .runfiles import (SCHEMA_VERSION, CheckpointStore, CheckpointWarning, effective_status, jsonable,
+from .runfiles import (SCHEMA_VERSION, CheckpointStore, effective_status, jsonable,
                        parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
                        write_atomic, write_json, write_npz)
 from .scene import _names
+from .snapshots import Snapshots
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
 
 __all__ = ["run_study", "default_output", "HISTORY_COLUMNS", "case_results", "write_atomic"]
@@ -205,116 +208,6 @@ class _Progress:
               f"{el:.0f} s{eta}", file=sys.stderr, flush=True)
 
 
-# ====================================================================== snapshots
-class _Snapshots:
-    """Fields of one case at the first accepted step at or past each chosen load."""
-
-    def __init__(self, case: Case, solver, vtk_dir: Path | None):
-        self.case = case
-        self.targets = [float(x) for x in case.snapshot_loads]
-        self.pending = list(range(len(self.targets)))
-        self.loads: list[float] = []
-        self.steps: list[int] = []
-        self.u: list[np.ndarray] = []
-        self.alpha: list[np.ndarray] = []
-        self.solver = solver
-        self.vtk_dir = vtk_dir
-        mesh = solver.mesh
-        self.nv = mesh.nv
-        self.dim = mesh.dim
-        ng = mesh.ngmesh
-        self.vertices = np.asarray(ng.Coordinates(), dtype=float)[:, :self.dim].copy()
-        if self.dim == 2:
-            tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        else:
-            # boundary triangles of the 3D mesh
-            tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        self.triangles = tri
-        rho = solver.rho.vec.FV().NumPy().copy()
-        self.rho = rho if self.dim == 2 else np.ones(len(tri))
-        self._vtk = None
-
-    def restore(self, data: dict):
-        self.loads = list(np.asarray(data["loads"], dtype=float))
-        self.steps = list(np.asarray(data["steps"], dtype=int))
-        self.u = list(np.asarray(data["u"], dtype=float))
-        self.alpha = list(np.asarray(data["alpha"], dtype=float))
-        self.pending = [int(i) for i in np.asarray(data["pending"], dtype=int)]
-
-    def state(self) -> dict:
-        k = len(self.loads)
-        return {"loads": np.asarray(self.loads, dtype=float), "steps": np.asarray(self.steps, dtype=int),
-                "u": np.asarray(self.u, dtype=float).reshape(k, self.nv, self.dim),
-                "alpha": np.asarray(self.alpha, dtype=float).reshape(k, self.nv),
-                "pending": np.asarray(self.pending, dtype=int)}
-
-    def vertex_fields(self):
-        s = self.solver
-        u = np.stack([s.u.components[i].vec.FV().NumPy()[:self.nv].copy() for i in range(self.dim)], axis=1)
-        if s.alpha is not None:
-            a = s.alpha.vec.FV().NumPy()[:self.nv].copy()
-        else:
-            a = np.zeros(self.nv)
-        return u, a
-
-    def maybe_take(self, prev_load: float, row: dict, final: bool = False):
-        load = float(row["load"])
-        hit = []
-        for i in self.pending:
-            x = self.targets[i]
-            if (prev_load - x) * (load - x) <= 0.0 and load != prev_load or abs(load - x) <= 1e-12 * max(1.0, abs(x)):
-                hit.append(i)
-            else:
-                break  # targets are taken in the order given
-        if hit:
-            self.pending = [i for i in self.pending if i not in hit]
-        if hit or (final and (not self.steps or self.steps[-1] != int(row["step"]))):
-            self.take(row)
-
-    def take(self, row: dict):
-        u, a = self.vertex_fields()
-        self.loads.append(float(row["load"]))
-        self.steps.append(int(row["step"]))
-        self.u.append(u)
-        self.alpha.append(a)
-        self.write_vtk(len(self.loads) - 1, float(row["load"]))
-
-    def arrays(self, name: str) -> dict:
-        st = self.state()
-        return {f"{name}__vertices": self.vertices, f"{name}__triangles": self.triangles,
-                f"{name}__rho": self.rho, f"{name}__loads": st["loads"], f"{name}__steps": st["steps"],
-                f"{name}__u": st["u"], f"{name}__alpha": st["alpha"]}
-
-    def write_vtk(self, k: int, load: float):
-        if self.vtk_dir is None:
-            return
-        try:
-            import ngsolve as ngs
-            s = self.solver
-            self.vtk_dir.mkdir(parents=True, exist_ok=True)
-            coefs, names = [s.u, s.rho], ["displacement", "density"]
-            if s.alpha is not None:
-                coefs.append(s.alpha)
-                names.append("alpha")
-            base = self.vtk_dir / f"{self.case.name}_{k:04d}"
-            ngs.VTKOutput(ma=s.mesh, coefs=coefs, names=names, filename=str(base), subdivision=0).Do()
-            self.write_pvd()
-        except Exception as e:  # VTK output is a convenience: never let it kill a run
-            print(f"[ngtmc] VTK output failed: {e}", file=sys.stderr)
-
-    def write_pvd(self):
-        if self.vtk_dir is None:
-            return
-        items = []
-        for k, load in enumerate(self.loads):
-            f = self.vtk_dir / f"{self.case.name}_{k:04d}.vtu"
-            if f.exists():
-                items.append(f'    <DataSet timestep="{load:.10g}" group="" part="0" file="{f.name}"/>')
-        text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
-                "  <Collection>\n" + "\n".join(items) + "\n  </Collection>\n</VTKFile>\n")
-        write_atomic(self.vtk_dir / f"{self.case.name}.pvd", text)
-
-
 # ====================================================================== the run
 class _Run:
     def __init__(self, mod, resolution, p, out: Path, overrides, progress, checkpoint_every, checkpoint_seconds,
@@ -442,7 +335,7 @@ class _Run:
         self.write_metadata()
 
     # ------------------------------------------------------------ checkpoints
-    def save_checkpoint(self, case: Case, state: dict, snaps: _Snapshots | None, done: bool):
+    def save_checkpoint(self, case: Case, state: dict, snaps: Snapshots | None, done: bool):
         arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(jsonable(state["rows"]))),
                   "results": np.array(json.dumps(jsonable(self.results.get(case.name, {})))),
                   "case_meta": np.array(json.dumps(jsonable(self.case_meta.get(case.name, {})))),
@@ -615,7 +508,7 @@ class _Run:
                           f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
-        snaps = _Snapshots(case, sim.solver, vtk_dir)
+        snaps = Snapshots(case, sim.solver, vtk_dir)
         if ck is not None:
             sim.set_state(ck["state"])
             if ck["snap"]:
@@ -732,7 +625,9 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         ``resume=True`` and no output, the latest ``reports/<study>-<resolution>*`` with a checkpoint.
     overrides : dict, optional
         Any parameter of the study (PARAMETERS or resolution keys, e.g. ``{"k_u": 50, "du_max": 1e-3}``);
-        strings are converted to the type of the default. Unknown keys raise StudyError.
+        strings are converted to the type of the default. Unknown keys and values of the wrong type
+        raise StudyError. With ``resume=True``: None takes the recorded overrides, and overrides
+        that differ from them raise StudyError listing the differences (``key: recorded -> given``).
     report : bool, optional
         Render ``report.html`` with :func:`ngtmc.report.render_report` at the end. None: try and only
         warn if it fails; True: fail if it fails; False: do not.
@@ -742,14 +637,17 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         True prints a progress line about every 5 s on stderr; a callable receives each history row
         (with its ``case``).
     threads : int or None
-        ``ngsolve.SetNumThreads``; the run is inside ``ngsolve.TaskManager()``. None: leave as is.
+        ``ngsolve.SetNumThreads`` (an integer >= 1); the run is inside ``ngsolve.TaskManager()``.
+        None: leave as is.
     checkpoint_every, checkpoint_seconds : checkpoint period in accepted steps and seconds.
     vtk : bool
         Write the ParaView series into ``vtk/``.
     callbacks : functions f(simulation, row) called after every accepted step (row includes ``case``).
 
     Raises StepFailure (after writing the history and metadata with status "failed") when a step
-    fails at the minimum increment.
+    fails at the minimum increment, and StudyError, before any folder is created or anything
+    solved, for bad input (unknown study, resolution or override, ill-typed or out-of-range
+    values, a bad scene, threads < 1) or a resume that would mix parameters.
     """
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
                                 or threads < 1):
