@@ -25,12 +25,36 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
+__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
            "jsonable", "parameters_hash", "process_info", "effective_status", "read_metadata",
            "resume_parameters"]
 
 #: Version of the run-folder format (``schema_version`` in metadata.json; absent means 1).
 SCHEMA_VERSION = 2
+
+#: Columns of a Simulation's history, in order, with their units (``history.csv`` has a ``case``
+#: column first). In 2D, force and energies are for the scene thickness: the force of a study run
+#: with thickness 1 mm is in N per mm (``force_unit`` in metadata.json). The one definition used
+#: by :data:`ngtmc.HISTORY_UNITS`, :data:`ngtmc.runner.HISTORY_COLUMNS` and the report.
+HISTORY_UNITS = {
+    "step": "-",
+    "load": "mm",
+    "force": "N",
+    "fracture_energy": "N mm",
+    "dissipated_energy": "N mm",
+    "elastic_energy": "N mm",
+    "regularisation_energy": "N mm",
+    "max_alpha": "-",
+    "min_J": "-",
+    "newton_iterations": "-",
+    "staggered_iterations": "-",
+    "cutbacks": "-",
+    "alpha_projected": "-",
+    "step_size": "mm",
+    "wall_time": "s",
+    "solve_time": "s",
+    "assembly_time": "s",
+}
 
 _UMASK = os.umask(0)
 os.umask(_UMASK)

@@ -38,7 +38,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from .runfiles import (SCHEMA_VERSION, CheckpointStore, effective_status, jsonable,
+from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, CheckpointStore, effective_status, jsonable,
                        parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
                        write_atomic, write_json, write_npz)
 from .scene import _names
@@ -47,10 +47,9 @@ from .study import Case, StudyError, load_study, normalise_name, study_parameter
 
 __all__ = ["run_study", "default_output", "HISTORY_COLUMNS", "case_results", "write_atomic"]
 
-#: Columns of history.csv, in order (``case`` first, then the Simulation's history columns).
-HISTORY_COLUMNS = ["case", "step", "load", "force", "fracture_energy", "dissipated_energy", "elastic_energy",
-                   "regularisation_energy", "max_alpha", "min_J", "newton_iterations", "staggered_iterations",
-                   "cutbacks", "alpha_projected", "step_size", "wall_time", "solve_time", "assembly_time"]
+#: Columns of history.csv, in order: ``case``, then the Simulation's history columns
+#: (:data:`ngtmc.runfiles.HISTORY_UNITS`, their units).
+HISTORY_COLUMNS = ["case", *HISTORY_UNITS]
 
 _UNITS = {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"}
 

@@ -28,6 +28,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS
 from .scene import Scene
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, Schedule
@@ -37,26 +38,9 @@ __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SC
 #: Solution schemes of a load step (see the module docstring).
 SCHEMES = ("single-pass", "staggered", "monolithic")
 
-#: Units of the history columns (force and energies are for the scene thickness in 2D).
-HISTORY_UNITS = {
-    "step": "-",
-    "load": "mm",
-    "force": "N",
-    "fracture_energy": "N mm",
-    "dissipated_energy": "N mm",
-    "elastic_energy": "N mm",
-    "regularisation_energy": "N mm",
-    "max_alpha": "-",
-    "min_J": "-",
-    "newton_iterations": "-",
-    "staggered_iterations": "-",
-    "cutbacks": "-",
-    "alpha_projected": "-",
-    "step_size": "mm",
-    "wall_time": "s",
-    "solve_time": "s",
-    "assembly_time": "s",
-}
+#: Units of the history columns (force and energies are for the scene thickness in 2D); defined
+#: once, in :mod:`ngtmc.runfiles`.
+HISTORY_UNITS = _HISTORY_UNITS
 
 
 class StepFailure(RuntimeError):

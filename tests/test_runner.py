@@ -283,3 +283,18 @@ def test_cli_version_and_show(capsys):
                                                                       for r in ("quick", "medium", "paper")]
     assert main(["show", "no-such-study"]) == 2
     assert "valid studies" in capsys.readouterr().err
+
+
+def test_history_columns_defined_once():
+    """simulation, runner, report and docs/run-directory.md agree on the history columns and units."""
+    import pathlib
+    import re
+    from ngtmc import report, runfiles, runner, simulation
+    assert simulation.HISTORY_UNITS is runfiles.HISTORY_UNITS and ngtmc.HISTORY_UNITS is runfiles.HISTORY_UNITS
+    assert runner.HISTORY_COLUMNS == ["case", *runfiles.HISTORY_UNITS]
+    assert list(report.HISTORY_COLUMNS) == runner.HISTORY_COLUMNS
+    assert all(report.HISTORY_COLUMNS[k] == u for k, u in runfiles.HISTORY_UNITS.items() if k != "force")
+    doc = (pathlib.Path(__file__).parents[1] / "docs" / "run-directory.md").read_text()
+    section = doc.split("## `history.csv`")[1].split("## ")[0]
+    documented = re.findall(r"^\| `(\w+)` \|", section, flags=re.M)
+    assert documented == runner.HISTORY_COLUMNS
