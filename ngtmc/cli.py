@@ -1,6 +1,8 @@
-"""Command line: ``ngtmc run NAME``, ``ngtmc list``, ``ngtmc report RUN_DIR``.
+"""Command line: ``ngtmc run NAME``, ``ngtmc list``, ``ngtmc show NAME``, ``ngtmc report RUN_DIR``.
 
+    ngtmc --version
     ngtmc list
+    ngtmc show three-point-bending
     ngtmc run three-point-bending --resolution medium --set k_u=50 --set du_max=1e-3
     ngtmc run three-point-bending --output reports/tpb --resume
     ngtmc report reports/three_point_bending-quick
@@ -14,7 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-__all__ = ["main", "build_parser", "parse_overrides"]
+__all__ = ["main", "build_parser", "parse_overrides", "show_study"]
 
 
 def parse_overrides(items) -> dict:
@@ -35,6 +37,8 @@ def parse_overrides(items) -> dict:
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="ngtmc", description="Third-medium contact and phase-field fracture: "
                                  "run the paper's validation studies and render their reports.")
+    from . import __version__
+    ap.add_argument("--version", action="version", version=f"ngtmc {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("run", help="run a named study into a run folder")
@@ -50,6 +54,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
 
     sub.add_parser("list", help="list the studies with their resolutions")
+
+    sh = sub.add_parser("show", help="a study's parameters (defaults, units) and resolutions")
+    sh.add_argument("name", help="study name (dashes or underscores; see `ngtmc list`)")
 
     rep = sub.add_parser("report", help="render report.html of a run folder, or an index of run folders")
     rep.add_argument("run_dir", nargs="?", help="run folder")
@@ -67,6 +74,58 @@ def _cmd_list() -> int:
                   f"default {getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}]")
         except Exception as e:  # a broken study must not hide the others
             print(f"{name.replace('_', '-'):24s} (cannot be loaded: {type(e).__name__}: {e})")
+    return 0
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, (list, tuple)):
+        return ",".join(_fmt(x) for x in v)
+    return str(v)
+
+
+def show_study(name: str) -> str:
+    """Text describing a study: title, summary, every parameter with its default and unit (mm, N,
+    MPa, ...) and description, and the mesh and step sizes of each resolution."""
+    import textwrap
+    from .runner import _guess_unit
+    from .study import load_study
+    mod = load_study(name)
+    lines = [f"{mod.NAME.replace('_', '-')}: {getattr(mod, 'TITLE', '')}"]
+    summary = " ".join(str(getattr(mod, "SUMMARY", "")).split())
+    if summary:
+        lines += textwrap.wrap(summary, 100, initial_indent="  ", subsequent_indent="  ")
+    rows = [(k, _fmt(v[0]), v[1], v[2]) for k, v in mod.PARAMETERS.items()]
+    w = [max([len(r[i]) for r in rows] + [len(h)]) for i, h in enumerate(("parameter", "default", "unit"))]
+    lines += ["", "Parameters (change with --set KEY=VALUE):",
+              f"  {'parameter':{w[0]}}  {'default':{w[1]}}  {'unit':{w[2]}}  description"]
+    lines += [f"  {k:{w[0]}}  {v:{w[1]}}  {u:{w[2]}}  {d}" for k, v, u, d in rows]
+    res = mod.RESOLUTIONS
+    keys = list(dict.fromkeys(k for r in res.values() for k in r))
+    info = getattr(mod, "RESOLUTION_PARAMETERS", {})
+    cols = list(res)
+    table = [(k, info.get(k, (_guess_unit(k), ""))[0], [_fmt(res[r].get(k, "-")) for r in cols],
+              info.get(k, ("", ""))[1]) for k in keys]
+    wk = max([len(t[0]) for t in table] + [3])
+    wu = max([len(t[1]) for t in table] + [4])
+    wc = [max([len(t[2][i]) for t in table] + [len(c)]) for i, c in enumerate(cols)]
+    default = getattr(mod, "DEFAULT_RESOLUTION", "quick")
+    lines += ["", f"Resolutions (mesh and step sizes; --resolution NAME, default {default}):",
+              f"  {'key':{wk}}  {'unit':{wu}}  " + "  ".join(f"{c:{wc[i]}}" for i, c in enumerate(cols))
+              + "  description"]
+    for k, u, vals, d in table:
+        lines.append(f"  {k:{wk}}  {u:{wu}}  " + "  ".join(f"{v:{wc[i]}}" for i, v in enumerate(vals)) + f"  {d}")
+    return "\n".join(lines)
+
+
+def _cmd_show(args) -> int:
+    from .study import StudyError
+    try:
+        print(show_study(args.name))
+    except StudyError as e:
+        print(f"ngtmc: error: {e}", file=sys.stderr)
+        return 2
     return 0
 
 
@@ -125,6 +184,8 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "list":
         return _cmd_list()
+    if args.command == "show":
+        return _cmd_show(args)
     if args.command == "run":
         return _cmd_run(args)
     if args.command == "report":

@@ -52,6 +52,7 @@ class Material:
 
     def __post_init__(self):
         _check_positive("E", self.E, "MPa")
+        check_number("Material parameter nu", self.nu, "dimensionless")
         if not (-1.0 < float(self.nu) < 0.5):
             raise ValueError(f"Material parameter nu (Poisson's ratio) = {self.nu!r} is outside the allowed range (-1, 0.5)")
         _check_positive("Gc", self.Gc, "N/mm")
@@ -72,11 +73,18 @@ class Material:
         return self.E / (1.0 - self.nu**2)
 
 
+def check_number(what: str, value, unit: str):
+    """Raise TypeError unless ``value`` is a real number (int or float, not a bool or a string);
+    ``what`` names the parameter and ``unit`` its unit in the message."""
+    import numbers
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        hint = " (a string: write the number without quotes)" if isinstance(value, str) else ""
+        raise TypeError(f"{what} must be a number ({unit}), got {type(value).__name__} {value!r}{hint}")
+
+
 def _check_positive(name: str, value, unit: str):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"parameter {name} must be a number ({unit}), got {value!r}") from None
+    check_number(f"Material parameter {name}", value, unit)
+    v = float(value)
     if not math.isfinite(v) or v <= 0.0:
         raise ValueError(f"parameter {name} = {value!r} {unit} is outside the allowed range: it must be finite and > 0")
 

@@ -33,27 +33,15 @@ from typing import Any, Iterable
 import numpy as np
 import pandas as pd
 
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS
+
 __all__ = ["load_run", "render_report", "render_index", "report_main",
            "HISTORY_COLUMNS", "gamma_of_rho", "gc_ratio_of_rho"]
 
-#: Columns of ``history.csv`` (docs/run-directory.md) with their units.
-HISTORY_COLUMNS: dict[str, str] = {
-    "case": "-",
-    "step": "-",
-    "load": "mm",
-    "force": "(force_unit)",
-    "fracture_energy": "N mm",
-    "elastic_energy": "N mm",
-    "regularisation_energy": "N mm",
-    "max_alpha": "-",
-    "min_J": "-",
-    "newton_iterations": "-",
-    "staggered_iterations": "-",
-    "cutbacks": "-",
-    "step_size": "mm",
-    "wall_time": "s",
-    "solve_time": "s",
-}
+#: Columns of ``history.csv`` (docs/run-directory.md) with their units, from the one definition
+#: in :mod:`ngtmc.runfiles`; the force is in the run's ``force_unit``.
+HISTORY_COLUMNS: dict[str, str] = {"case": "-", **{k: "(force_unit)" if k == "force" else u
+                                                   for k, u in _HISTORY_UNITS.items()}}
 
 #: Largest number of phase-field frames shown per case (frames are skipped evenly beyond this).
 MAX_FRAMES = 8
@@ -136,6 +124,11 @@ def _load(run_dir, with_snapshots: bool = True):
             meta[key] = empty()
     meta.setdefault("study", run_dir.name)
     meta.setdefault("status", "unknown")
+    # a "running" status whose process is gone is an interrupted (resumable) run
+    from .runfiles import effective_status
+    meta["status"], note = effective_status(meta)
+    if note:
+        meta["status_note"] = note
     meta.setdefault("force_unit", meta["units"].get("force", "N"))
 
     hist_path = run_dir / "history.csv"

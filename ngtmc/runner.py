@@ -12,8 +12,11 @@ Every file is written to a temporary file and moved into place with ``os.replace
 leaves a truncated history or metadata behind. Checkpoints (``checkpoint/<case>.npz``: the
 Simulation state, the history rows and the snapshots of that case) are written every
 ``checkpoint_every`` accepted steps or ``checkpoint_seconds`` seconds, whichever comes first, and
-when a run is interrupted or fails. ``run_study(..., resume=True)`` continues from them and gives
-the same history as an uninterrupted run (wall and solve times aside).
+when a run is interrupted or fails; each case keeps two generations. ``run_study(...,
+resume=True)`` continues from them and gives the same history as an uninterrupted run (wall and
+solve times aside). A resume takes the recorded overrides and refuses other ones, skips an
+unreadable checkpoint (named in a warning) for the older generation, and never rewrites the rows
+of a completed case (see :mod:`ngtmc.runfiles`).
 
 A failed run (:class:`ngtmc.StepFailure`) still writes its history and metadata, with status
 ``"failed"`` and the error message, and then re-raises. An interrupted run (KeyboardInterrupt)
@@ -22,15 +25,12 @@ gets status ``"interrupted"``.
 from __future__ import annotations
 
 import datetime as _dt
-import io
 import json
-import math
 import os
 from pathlib import Path
 import platform
 import subprocess
 import sys
-import tempfile
 import time
 from types import ModuleType
 from typing import Callable, Sequence
@@ -38,71 +38,24 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, CheckpointStore, effective_status, jsonable,
+                       parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
+                       write_atomic, write_json, write_npz)
 from .scene import _names
+from .snapshots import Snapshots
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
 
 __all__ = ["run_study", "default_output", "HISTORY_COLUMNS", "case_results", "write_atomic"]
 
-#: Columns of history.csv, in order (``case`` first, then the Simulation's history columns).
-HISTORY_COLUMNS = ["case", "step", "load", "force", "fracture_energy", "dissipated_energy", "elastic_energy",
-                   "regularisation_energy", "max_alpha", "min_J", "newton_iterations", "staggered_iterations",
-                   "cutbacks", "alpha_projected", "step_size", "wall_time", "solve_time", "assembly_time"]
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
+#: Columns of history.csv, in order: ``case``, then the Simulation's history columns
+#: (:data:`ngtmc.runfiles.HISTORY_UNITS`, their units).
+HISTORY_COLUMNS = ["case", *HISTORY_UNITS]
 
 _UNITS = {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"}
 
-
-# ====================================================================== atomic file output
-def write_atomic(path, data: bytes | str):
-    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix="." + path.name + ".", suffix=".tmp")
-    try:
-        os.chmod(tmp, 0o666 & ~_UMASK)     # mkstemp creates 0600; give the file the usual permissions
-        with os.fdopen(fd, "wb") as f:
-            f.write(data.encode() if isinstance(data, str) else data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _write_json(path, obj):
-    write_atomic(path, json.dumps(_jsonable(obj), indent=2, allow_nan=False) + "\n")
-
-
-def _write_npz(path, arrays: dict):
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    write_atomic(path, buf.getvalue())
-
-
-def _jsonable(x, other=str):
-    """Plain JSON types; non-finite floats become null; any other object becomes ``other(x)``."""
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v, other) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v, other) for v in x]
-    if isinstance(x, np.ndarray):
-        return [_jsonable(v, other) for v in x.tolist()]
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (float, np.floating)):
-        x = float(x)
-        return x if math.isfinite(x) else None
-    if x is None or isinstance(x, (int, str)):
-        return x
-    return other(x)
+_jsonable = jsonable            # kept for the callers of the former private names
+_write_json = write_json
+_write_npz = write_npz
 
 
 # ====================================================================== metadata pieces
@@ -254,116 +207,6 @@ class _Progress:
               f"{el:.0f} s{eta}", file=sys.stderr, flush=True)
 
 
-# ====================================================================== snapshots
-class _Snapshots:
-    """Fields of one case at the first accepted step at or past each chosen load."""
-
-    def __init__(self, case: Case, solver, vtk_dir: Path | None):
-        self.case = case
-        self.targets = [float(x) for x in case.snapshot_loads]
-        self.pending = list(range(len(self.targets)))
-        self.loads: list[float] = []
-        self.steps: list[int] = []
-        self.u: list[np.ndarray] = []
-        self.alpha: list[np.ndarray] = []
-        self.solver = solver
-        self.vtk_dir = vtk_dir
-        mesh = solver.mesh
-        self.nv = mesh.nv
-        self.dim = mesh.dim
-        ng = mesh.ngmesh
-        self.vertices = np.asarray(ng.Coordinates(), dtype=float)[:, :self.dim].copy()
-        if self.dim == 2:
-            tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        else:
-            # boundary triangles of the 3D mesh
-            tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        self.triangles = tri
-        rho = solver.rho.vec.FV().NumPy().copy()
-        self.rho = rho if self.dim == 2 else np.ones(len(tri))
-        self._vtk = None
-
-    def restore(self, data: dict):
-        self.loads = list(np.asarray(data["loads"], dtype=float))
-        self.steps = list(np.asarray(data["steps"], dtype=int))
-        self.u = list(np.asarray(data["u"], dtype=float))
-        self.alpha = list(np.asarray(data["alpha"], dtype=float))
-        self.pending = [int(i) for i in np.asarray(data["pending"], dtype=int)]
-
-    def state(self) -> dict:
-        k = len(self.loads)
-        return {"loads": np.asarray(self.loads, dtype=float), "steps": np.asarray(self.steps, dtype=int),
-                "u": np.asarray(self.u, dtype=float).reshape(k, self.nv, self.dim),
-                "alpha": np.asarray(self.alpha, dtype=float).reshape(k, self.nv),
-                "pending": np.asarray(self.pending, dtype=int)}
-
-    def vertex_fields(self):
-        s = self.solver
-        u = np.stack([s.u.components[i].vec.FV().NumPy()[:self.nv].copy() for i in range(self.dim)], axis=1)
-        if s.alpha is not None:
-            a = s.alpha.vec.FV().NumPy()[:self.nv].copy()
-        else:
-            a = np.zeros(self.nv)
-        return u, a
-
-    def maybe_take(self, prev_load: float, row: dict, final: bool = False):
-        load = float(row["load"])
-        hit = []
-        for i in self.pending:
-            x = self.targets[i]
-            if (prev_load - x) * (load - x) <= 0.0 and load != prev_load or abs(load - x) <= 1e-12 * max(1.0, abs(x)):
-                hit.append(i)
-            else:
-                break  # targets are taken in the order given
-        if hit:
-            self.pending = [i for i in self.pending if i not in hit]
-        if hit or (final and (not self.steps or self.steps[-1] != int(row["step"]))):
-            self.take(row)
-
-    def take(self, row: dict):
-        u, a = self.vertex_fields()
-        self.loads.append(float(row["load"]))
-        self.steps.append(int(row["step"]))
-        self.u.append(u)
-        self.alpha.append(a)
-        self.write_vtk(len(self.loads) - 1, float(row["load"]))
-
-    def arrays(self, name: str) -> dict:
-        st = self.state()
-        return {f"{name}__vertices": self.vertices, f"{name}__triangles": self.triangles,
-                f"{name}__rho": self.rho, f"{name}__loads": st["loads"], f"{name}__steps": st["steps"],
-                f"{name}__u": st["u"], f"{name}__alpha": st["alpha"]}
-
-    def write_vtk(self, k: int, load: float):
-        if self.vtk_dir is None:
-            return
-        try:
-            import ngsolve as ngs
-            s = self.solver
-            self.vtk_dir.mkdir(parents=True, exist_ok=True)
-            coefs, names = [s.u, s.rho], ["displacement", "density"]
-            if s.alpha is not None:
-                coefs.append(s.alpha)
-                names.append("alpha")
-            base = self.vtk_dir / f"{self.case.name}_{k:04d}"
-            ngs.VTKOutput(ma=s.mesh, coefs=coefs, names=names, filename=str(base), subdivision=0).Do()
-            self.write_pvd()
-        except Exception as e:  # VTK output is a convenience: never let it kill a run
-            print(f"[ngtmc] VTK output failed: {e}", file=sys.stderr)
-
-    def write_pvd(self):
-        if self.vtk_dir is None:
-            return
-        items = []
-        for k, load in enumerate(self.loads):
-            f = self.vtk_dir / f"{self.case.name}_{k:04d}.vtu"
-            if f.exists():
-                items.append(f'    <DataSet timestep="{load:.10g}" group="" part="0" file="{f.name}"/>')
-        text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
-                "  <Collection>\n" + "\n".join(items) + "\n  </Collection>\n</VTKFile>\n")
-        write_atomic(self.vtk_dir / f"{self.case.name}.pvd", text)
-
-
 # ====================================================================== the run
 class _Run:
     def __init__(self, mod, resolution, p, out: Path, overrides, progress, checkpoint_every, checkpoint_seconds,
@@ -377,7 +220,10 @@ class _Run:
         self.checkpoint_seconds = float(checkpoint_seconds)
         self.callbacks = list(callbacks or [])
         self.vtk = vtk
-        self.cases: list[Case] = list(mod.cases(p))
+        try:
+            self.cases: list[Case] = list(mod.cases(p))
+        except (ValueError, TypeError) as e:     # bad parameters, refused before any folder exists
+            raise StudyError(f"study {mod.NAME!r} cannot build its cases: {e}") from e
         names = [c.name for c in self.cases]
         if len(set(names)) != len(names):
             raise StudyError(f"study {mod.NAME!r}: case names are not unique: {names}")
@@ -392,6 +238,9 @@ class _Run:
         self.t0 = time.perf_counter()
         self.wall_before = 0.0
         self.created = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+        self.hash = parameters_hash(p)
+        self.store = CheckpointStore(out / "checkpoint")
+        self.resume_from: dict[str, dict] = {}   # case -> checkpoint to continue from (see prepare_resume)
 
     # ------------------------------------------------------------ files
     @property
@@ -436,6 +285,7 @@ class _Run:
             "study": mod.NAME,
             "title": getattr(mod, "TITLE", mod.NAME),
             "summary_text": getattr(mod, "SUMMARY", ""),
+            "schema_version": SCHEMA_VERSION,
             "resolution": self.resolution,
             "created": self.created,
             "status": self.status,
@@ -446,6 +296,7 @@ class _Run:
             "force_unit": "N/mm" if dim == 2 else "N",
             "parameters": _parameter_table(mod, p),
             "overrides": self.overrides,
+            "parameters_hash": self.hash,
             "mesh": {k: v for k, v in (self.mesh or {}).items() if k != "dim"},
             "wall_time_s": self.wall_time(),
             "cases": [dict(name=c.name, label=c.label, parameters=c.parameters, **self.case_meta.get(c.name, {}))
@@ -457,6 +308,7 @@ class _Run:
             "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else None,
             "host": {"platform": platform.platform(), "cpu_count": os.cpu_count(),
                      "threads": _threads()},
+            "process": process_info(),
         }
         if self.error:
             meta["error"] = self.error
@@ -482,10 +334,11 @@ class _Run:
         self.write_metadata()
 
     # ------------------------------------------------------------ checkpoints
-    def save_checkpoint(self, case: Case, state: dict, snaps: _Snapshots | None, done: bool):
-        arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(_jsonable(state["rows"]))),
-                  "results": np.array(json.dumps(_jsonable(self.results.get(case.name, {})))),
-                  "case_meta": np.array(json.dumps(_jsonable(self.case_meta.get(case.name, {}))))}
+    def save_checkpoint(self, case: Case, state: dict, snaps: Snapshots | None, done: bool):
+        arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(jsonable(state["rows"]))),
+                  "results": np.array(json.dumps(jsonable(self.results.get(case.name, {})))),
+                  "case_meta": np.array(json.dumps(jsonable(self.case_meta.get(case.name, {})))),
+                  "parameters_hash": np.array(self.hash)}
         if not done:
             for k, v in state["solver"].items():
                 arrays["solver__" + k] = np.asarray(v)
@@ -498,16 +351,13 @@ class _Run:
                 arrays["snap__" + k] = v
             for k, v in snaps.arrays(case.name).items():
                 arrays["snaparr__" + k] = v
-        _write_npz(self.ckpt_dir / f"{case.name}.npz", arrays)
+        self.store.save(case.name, arrays)
 
-    def load_checkpoint(self, case: Case) -> dict | None:
-        f = self.ckpt_dir / f"{case.name}.npz"
-        if not f.exists():
-            return None
-        with np.load(f, allow_pickle=False) as z:
-            d = {k: z[k] for k in z.files}
+    @staticmethod
+    def _decode_checkpoint(d: dict) -> dict:
         ck = {"done": bool(d["done"]), "rows": json.loads(str(d["rows"])),
-              "results": json.loads(str(d["results"])), "case_meta": json.loads(str(d["case_meta"]))}
+              "results": json.loads(str(d["results"])), "case_meta": json.loads(str(d["case_meta"])),
+              "parameters_hash": str(d["parameters_hash"]) if "parameters_hash" in d else None}
         if not ck["done"]:
             sc = d["scalars"]
             ck["state"] = {"solver": {k[len("solver__"):]: v for k, v in d.items() if k.startswith("solver__")},
@@ -519,20 +369,103 @@ class _Run:
         ck["snaparr"] = {k[len("snaparr__"):]: v for k, v in d.items() if k.startswith("snaparr__")}
         return ck
 
+    def load_checkpoint(self, case: Case) -> dict | None:
+        """The newest readable checkpoint of ``case`` (see CheckpointStore.load), or None. Raises
+        StudyError when it was computed with other parameters than this run."""
+        ck = self.store.load(case.name, self._decode_checkpoint)
+        if ck is not None and ck["parameters_hash"] not in (None, self.hash):
+            raise StudyError(f"cannot resume {self.out}: checkpoint of case {case.name!r} was computed with other "
+                             f"parameters ({ck['parameters_hash']}) than this run ({self.hash}); start a new run")
+        return ck
+
+    def _adopt_completed(self, case: Case, ck: dict):
+        self.rows[case.name] = ck["rows"]
+        self.results[case.name] = ck["results"]
+        self.case_meta[case.name] = ck["case_meta"]
+        if ck["snaparr"]:
+            self.snaps[case.name] = ck["snaparr"]
+        if self.mesh is None and ck["case_meta"].get("mesh"):
+            self.mesh = dict(ck["case_meta"]["mesh"])
+
+    def prepare_resume(self, meta: dict | None):
+        """Read every case's checkpoint before anything is solved or written: completed cases are
+        taken over, interrupted ones continue from their state. A case without a readable
+        checkpoint that the recorded metadata calls completed is taken from history.csv (and
+        snapshots.npz); any other case without one is re-run from the start."""
+        recorded = (meta or {}).get("results") or {}
+        old_hist = old_snaps = None
+        for case in self.cases:
+            ck = self.load_checkpoint(case)
+            if ck is not None and ck["done"]:
+                self._adopt_completed(case, ck)
+            elif ck is not None:
+                self.resume_from[case.name] = ck
+                # kept in the files until the case goes on, so that no failure before then loses them
+                self.rows[case.name] = ck["rows"]
+                self.results[case.name] = ck["results"]
+                self.case_meta[case.name] = ck["case_meta"]
+                if ck["snaparr"]:
+                    self.snaps[case.name] = ck["snaparr"]
+            elif (recorded.get(case.name) or {}).get("status") == "completed":
+                if old_hist is None:
+                    old_hist, old_snaps = self._recorded_files()
+                rows = old_hist[old_hist["case"].astype(str) == case.name] if len(old_hist) else old_hist
+                if len(rows):
+                    cm = next((dict(c) for c in meta.get("cases", []) if c.get("name") == case.name), {})
+                    for k in ("name", "label", "parameters"):
+                        cm.pop(k, None)
+                    ck = {"rows": [{k: v for k, v in r.items() if not (isinstance(v, float) and np.isnan(v))}
+                                   for r in rows.drop(columns="case").to_dict("records")],
+                          "results": recorded[case.name], "case_meta": cm,
+                          "snaparr": {k: v for k, v in old_snaps.items() if k.startswith(case.name + "__")}}
+                    self._adopt_completed(case, ck)
+                    self.save_checkpoint(case, {"rows": ck["rows"]}, None, done=True)
+                    self.progress.say(f"case {case.name}: no readable checkpoint; its completed results are "
+                                      "taken from history.csv and metadata.json")
+
+    def _recorded_files(self):
+        try:
+            hist = pd.read_csv(self.out / "history.csv")
+        except Exception:
+            hist = pd.DataFrame()
+        snaps = {}
+        try:
+            with np.load(self.out / "snapshots.npz", allow_pickle=False) as z:
+                snaps = {k: z[k] for k in z.files}
+        except Exception:
+            pass
+        return hist, snaps
+
+    def validate(self):
+        """Check every case still to be computed (scene, schedule, control, options) before any folder
+        is created or any step solved; raise StudyError naming the case and the parameter."""
+        import inspect
+        from .simulation import Simulation
+        from .stepping import AdaptiveStepControl, Schedule
+        allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
+        for case in self.cases:
+            if case.name in self.results or case.run is not None:
+                continue
+            try:
+                if case.control is not None and not isinstance(case.control, AdaptiveStepControl):
+                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl or None, got "
+                                    f"{type(case.control).__name__} {case.control!r}")
+                if not isinstance(case.schedule, Schedule):
+                    case.schedule = Schedule.monotonic(float(case.schedule))
+                bad = sorted(set(case.options or {}) - allowed)
+                if bad:
+                    raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
+                case.build_scene().check()
+            except (ValueError, TypeError) as e:
+                raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
+
     # ------------------------------------------------------------ one case
     def run_case(self, k: int, case: Case, resume: bool):
         import ngsolve as ngs
         from .simulation import Simulation, StepFailure
 
-        ck = self.load_checkpoint(case) if resume else None
-        if ck is not None and ck["done"]:
-            self.rows[case.name] = ck["rows"]
-            self.results[case.name] = ck["results"]
-            self.case_meta[case.name] = ck["case_meta"]
-            if ck["snaparr"]:
-                self.snaps[case.name] = ck["snaparr"]
-            if self.mesh is None and ck["case_meta"].get("mesh"):
-                self.mesh = dict(ck["case_meta"]["mesh"])
+        ck = self.resume_from.pop(case.name, None)
+        if case.name in self.results and self.results[case.name].get("status") == "completed":
             self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: already complete (checkpoint)")
             return
 
@@ -576,7 +509,7 @@ class _Run:
                           f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
-        snaps = _Snapshots(case, sim.solver, vtk_dir)
+        snaps = Snapshots(case, sim.solver, vtk_dir)
         if ck is not None:
             sim.set_state(ck["state"])
             if ck["snap"]:
@@ -639,16 +572,15 @@ class _Run:
         self.write_all()
 
     # ------------------------------------------------------------ whole run
-    def run(self, resume: bool):
-        if resume:
-            meta_f = self.out / "metadata.json"
-            if meta_f.exists():
-                try:
-                    old = json.loads(meta_f.read_text())
-                    self.wall_before = float(old.get("wall_time_s") or 0.0)
-                    self.created = old.get("created", self.created)
-                except Exception:
-                    pass
+    def run(self, resume: bool, meta: dict | None = None):
+        """Compute every case not taken over by :meth:`prepare_resume`; ``meta``: the recorded
+        metadata of the run to resume (its creation date and wall time carry over)."""
+        if resume and meta:
+            try:
+                self.wall_before = float(meta.get("wall_time_s") or 0.0)
+                self.created = meta.get("created", self.created)
+            except (TypeError, ValueError):
+                pass
         self.out.mkdir(parents=True, exist_ok=True)
         self.write_metadata()
         try:
@@ -694,7 +626,9 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         ``resume=True`` and no output, the latest ``reports/<study>-<resolution>*`` with a checkpoint.
     overrides : dict, optional
         Any parameter of the study (PARAMETERS or resolution keys, e.g. ``{"k_u": 50, "du_max": 1e-3}``);
-        strings are converted to the type of the default. Unknown keys raise StudyError.
+        strings are converted to the type of the default. Unknown keys and values of the wrong type
+        raise StudyError. With ``resume=True``: None takes the recorded overrides, and overrides
+        that differ from them raise StudyError listing the differences (``key: recorded -> given``).
     report : bool, optional
         Render ``report.html`` with :func:`ngtmc.report.render_report` at the end. None: try and only
         warn if it fails; True: fail if it fails; False: do not.
@@ -704,38 +638,63 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         True prints a progress line about every 5 s on stderr; a callable receives each history row
         (with its ``case``).
     threads : int or None
-        ``ngsolve.SetNumThreads``; the run is inside ``ngsolve.TaskManager()``. None: leave as is.
+        ``ngsolve.SetNumThreads`` (an integer >= 1); the run is inside ``ngsolve.TaskManager()``.
+        None: leave as is.
     checkpoint_every, checkpoint_seconds : checkpoint period in accepted steps and seconds.
     vtk : bool
         Write the ParaView series into ``vtk/``.
     callbacks : functions f(simulation, row) called after every accepted step (row includes ``case``).
 
     Raises StepFailure (after writing the history and metadata with status "failed") when a step
-    fails at the minimum increment.
+    fails at the minimum increment, and StudyError, before any folder is created or anything
+    solved, for bad input (unknown study, resolution or override, ill-typed or out-of-range
+    values, a bad scene, threads < 1) or a resume that would mix parameters.
     """
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
+                                or threads < 1):
+        raise StudyError(f"threads = {threads!r} is not allowed: give an integer >= 1 (NGSolve threads), "
+                         "or None to leave the thread count as it is")
     mod = name if isinstance(name, ModuleType) else load_study(name)
-    res, p = study_parameters(mod, resolution, overrides)
-    if output is None:
-        if resume:
-            output = _latest_run(mod.NAME, res)
+    meta = None
+    if resume:
+        if output is None:
+            output = _latest_run(mod.NAME, resolution or getattr(mod, "DEFAULT_RESOLUTION", "quick"))
             if output is None:
-                raise StudyError(f"resume=True but no run folder reports/{mod.NAME}-{res}* with a checkpoint exists; "
-                                 "give output=")
-        else:
-            output = default_output(mod.NAME, res)
-    out = Path(output)
-    if resume and not (out / "checkpoint").is_dir():
-        raise StudyError(f"resume=True but {out} has no checkpoint/ folder")
-    if not resume and out.exists() and (out / "history.csv").exists():
-        raise StudyError(f"{out} holds a run already: choose another output, or resume=True to continue it")
-    run = _Run(mod, res, p, out, overrides, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+                raise StudyError(f"resume=True but no run folder reports/{mod.NAME}-"
+                                 f"{resolution or getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}* with a checkpoint "
+                                 "exists; give output=")
+        out = Path(output)
+        if not (out / "checkpoint").is_dir():
+            raise StudyError(f"resume=True but {out} has no checkpoint/ folder")
+        meta = read_metadata(out)
+        if meta is not None:
+            status, note = effective_status(meta)
+            proc = meta.get("process") or {}
+            if status == "running" and note and "alive" in note and proc.get("pid") != os.getpid():
+                raise StudyError(f"cannot resume {out}: it is still running ({note})")
+        res, typed, p = resume_parameters(meta, mod, resolution, overrides, out)
+    else:
+        res, p = study_parameters(mod, resolution, overrides)
+        typed = typed_overrides(p, overrides)
+        out = Path(output) if output is not None else default_output(mod.NAME, res)
+        if out.exists() and (out / "history.csv").exists():
+            old = read_metadata(out) or {}
+            status, note = effective_status(old) if old else ("unknown", None)
+            raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
+                             "another output, or resume=True / --resume to continue it")
+    run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+    if resume:
+        if meta is not None and meta.get("status") == "running":
+            run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")
+        run.prepare_resume(meta)
+    run.validate()     # bad input is refused here, before any folder is created or any step solved
     import ngsolve as ngs
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
     try:
         with _terminate_as_interrupt(), ngs.TaskManager():
-            run.run(resume)
+            run.run(resume, meta)
     except BaseException:
         # a failed or interrupted run still gets its report (with a status banner): nothing is lost
         if report or report is None:

@@ -20,7 +20,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import ngsolve as ngs
 
-from .materials import Material
+from .materials import Material, check_number
 
 __all__ = ["Support", "DisplacementLoad", "Regulariser", "Scene", "ResolutionWarning"]
 
@@ -93,6 +93,7 @@ class Regulariser:
 
     def __post_init__(self):
         for name, v in (("kbar_r", self.kbar_r), ("length", self.length)):
+            check_number(f"Regulariser {name}", v, "mm" if name == "length" else "dimensionless")
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"Regulariser {name} = {v!r} is outside the allowed range: finite and > 0")
         if self.damping not in ("none", "exp"):
@@ -114,10 +115,17 @@ class Scene:
     Parameters
     ----------
     mesh : ngsolve.Mesh
-        2D (plane strain) or 3D mesh with named regions and boundaries.
+        2D (plane strain) or 3D mesh with named regions and boundaries (not empty).
     materials : mapping region name -> Material
         Base (fully dense) material of every region of the mesh. A void region has the material it is
         interpolated from (its stiffness is gamma(rho) times this one).
+
+        **Region names are regular expressions**, here and in ``density``, ``fracture_regions`` and
+        ``Regulariser.regions``, matched against the whole name of each mesh region (``re.fullmatch``):
+        ``".*"`` matches every region, ``"beam|band"`` two of them. Within ``materials`` (and within
+        ``density``) each region must be matched by exactly one pattern: overlapping patterns such as
+        ``{".*": steel, "void": soft}`` are refused. Boundary names of ``Support`` and
+        ``DisplacementLoad`` are regular expressions too.
     supports : list of Support
     load : DisplacementLoad
     density : mapping region name -> rho in [0, 1], or array of one rho per element, optional
@@ -130,8 +138,9 @@ class Scene:
         Parameters a (> 0) and b (> 0) of the toughness interpolation of Eq. 18.
     residual_stiffness : float
         Added to g(alpha), >= 0 (default 1e-6; keep it at least about gamma0).
-    thickness : float
-        Out-of-plane thickness in 2D, mm (> 0). Ignored in 3D.
+    thickness : float or None
+        Out-of-plane thickness of a 2D (plane strain) mesh, mm (> 0; None means 1 mm). A 3D mesh has
+        its own depth: giving a thickness there is refused (it stays None).
     order : int or None
         Polynomial order of the displacement; None chooses 2 with a regulariser and 1 without.
     variable_order : bool
@@ -153,11 +162,15 @@ class Scene:
     gc_a: float = 10.0
     gc_b: float = 100.0
     residual_stiffness: float = 1e-6
-    thickness: float = 1.0
+    thickness: float | None = None
     order: int | None = None
     variable_order: bool = True
     name: str = "scene"
     _checked: bool = field(default=False, repr=False)
+
+    def __post_init__(self):
+        if self.thickness is None and getattr(self.mesh, "dim", 2) == 2:
+            self.thickness = 1.0
 
     # ---------------------------------------------------------------- derived properties
     @property
@@ -211,8 +224,21 @@ class Scene:
             raise TypeError(f"Scene.mesh must be an ngsolve.Mesh, got {type(mesh).__name__}")
         if mesh.dim not in (2, 3):
             raise ValueError(f"mesh dimension {mesh.dim} is not supported (2 or 3)")
+        if mesh.ne == 0:
+            raise ValueError("Scene.mesh is empty (0 elements): generate it from a geometry with faces (2D) or "
+                             "solids (3D), e.g. ngsolve.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=...))")
+        if mesh.dim == 3 and self.thickness is not None:
+            raise ValueError(f"Scene.thickness = {self.thickness!r} mm is given for a 3D mesh: thickness applies to "
+                             "2D (plane strain) meshes only; leave it unset (None) in 3D")
+        for name, unit in (("gamma0", "dimensionless"), ("gc_a", "dimensionless"), ("gc_b", "dimensionless"),
+                           ("residual_stiffness", "dimensionless"), ("thickness", "mm")):
+            if getattr(self, name) is not None:
+                check_number(f"Scene.{name}", getattr(self, name), unit)
+        if self.order is not None and (isinstance(self.order, bool) or not isinstance(self.order, (int, np.integer))):
+            raise TypeError(f"Scene.order must be an integer 1..4 or None, got {type(self.order).__name__} {self.order!r}")
         regions = set(mesh.GetMaterials())
         boundaries = set(mesh.GetBoundaries())
+        self._check_patterns(regions)
 
         def need_region(name, what):
             if not any(re.fullmatch(name, r) for r in regions):
@@ -263,7 +289,7 @@ class Scene:
             raise ValueError(f"DisplacementLoad direction {self.load.direction!r} does not exist in {mesh.dim}D")
         if not (0.0 < float(self.gamma0) < 1.0):
             raise ValueError(f"Scene.gamma0 = {self.gamma0!r} is outside the allowed range (0, 1)")
-        for name in ("gc_a", "gc_b", "thickness"):
+        for name in ("gc_a", "gc_b") + (("thickness",) if mesh.dim == 2 else ()):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"Scene.{name} = {v!r} is outside the allowed range: finite and > 0")
@@ -273,6 +299,29 @@ class Scene:
             self._check_resolution()
         self._checked = True
         return self
+
+    def _check_patterns(self, regions):
+        """Each mesh region matched by at most one pattern of ``materials`` and of ``density``; every
+        pattern a valid regular expression."""
+        maps = [("Scene.materials", self.materials)]
+        if isinstance(self.density, Mapping):
+            maps.append(("Scene.density", self.density))
+            for r, v in self.density.items():
+                check_number(f"Scene.density[{r!r}]", v, "dimensionless, in [0, 1]")
+        for what, mapping in maps:
+            for k in mapping:
+                try:
+                    re.compile(k)
+                except (re.error, TypeError) as e:
+                    raise ValueError(f"{what}: {k!r} is not a valid regular expression ({e}); region names are "
+                                     "regular expressions matched against the whole region name") from None
+            for r in sorted(regions):
+                pats = [k for k in mapping if re.fullmatch(k, r)]
+                if len(pats) > 1:
+                    raise ValueError(
+                        f"{what}: region {r!r} is matched by several patterns {pats}. Region names are regular "
+                        f"expressions matched against the whole region name ('.*' matches every region): give each "
+                        f"region exactly one pattern, e.g. list the regions as 'a|b|c'")
 
     def material_of(self, region: str) -> Material:
         for k, m in self.materials.items():

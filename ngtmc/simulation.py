@@ -29,6 +29,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS
 from .scene import Scene
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ChangeControl, Schedule, StepObservation
@@ -38,26 +39,9 @@ __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SC
 #: Solution schemes of a load step (see the module docstring).
 SCHEMES = ("single-pass", "staggered", "monolithic")
 
-#: Units of the history columns (force and energies are for the scene thickness in 2D).
-HISTORY_UNITS = {
-    "step": "-",
-    "load": "mm",
-    "force": "N",
-    "fracture_energy": "N mm",
-    "dissipated_energy": "N mm",
-    "elastic_energy": "N mm",
-    "regularisation_energy": "N mm",
-    "max_alpha": "-",
-    "min_J": "-",
-    "newton_iterations": "-",
-    "staggered_iterations": "-",
-    "cutbacks": "-",
-    "alpha_projected": "-",
-    "step_size": "mm",
-    "wall_time": "s",
-    "solve_time": "s",
-    "assembly_time": "s",
-}
+#: Units of the history columns (force and energies are for the scene thickness in 2D); defined
+#: once, in :mod:`ngtmc.runfiles`.
+HISTORY_UNITS = _HISTORY_UNITS
 
 
 class StepFailure(RuntimeError):
@@ -126,8 +110,16 @@ class Simulation:
                  scheme: str = "single-pass", staggered_tol: float = 1e-3, max_staggered: int = 30,
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
                  max_steps: int = 100000, compile: bool | str = "auto", coupled: dict | None = None):
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be an ngtmc.Scene, got {type(scene).__name__}")
         if not isinstance(schedule, Schedule):
+            from .materials import check_number
+            check_number("schedule (a Schedule, or the final load)", schedule, "mm")
             schedule = Schedule.monotonic(float(schedule))
+        if control is not None and not isinstance(control, AdaptiveStepControl):
+            hint = (f"; write AdaptiveStepControl(**{control!r})" if isinstance(control, dict) else "")
+            raise TypeError(f"control must be an ngtmc.AdaptiveStepControl (du_max mm, k_u 1/N, du_min mm, n_s), "
+                            f"or None for constant steps; got {type(control).__name__}{hint}")
         if control is None:
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
         if scheme not in SCHEMES:

@@ -114,7 +114,7 @@ class Solver:
         if compile == "auto":  # C++ code generation pays off on larger meshes only
             compile = "real" if scene.mesh.ne >= AUTO_REAL_COMPILE_ELEMENTS else True
         self._compile = compile
-        self.thickness = scene.thickness if d == 2 else 1.0
+        self.thickness = float(scene.thickness) if d == 2 else 1.0
 
         # ------------------------------------------------------------ spaces
         dirichlet = [[] for _ in range(d)]

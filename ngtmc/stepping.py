@@ -131,6 +131,9 @@ class AdaptiveStepControl:
     successes: int = field(default=0)
 
     def __post_init__(self):
+        from .materials import check_number
+        for name, unit in (("du_max", "mm"), ("k_u", "1/N"), ("du_min", "mm"), ("n_s", "steps")):
+            check_number(f"AdaptiveStepControl {name}", getattr(self, name), unit)
         if not (math.isfinite(self.du_max) and self.du_max > 0):
             raise ValueError(f"du_max = {self.du_max!r} mm is outside the allowed range: > 0")
         if not (math.isfinite(self.k_u) and self.k_u >= 0):

@@ -19,6 +19,8 @@ import pkgutil
 from types import ModuleType
 from typing import Any, Callable
 
+import numpy as np
+
 __all__ = ["Case", "StudyError", "list_studies", "load_study", "normalise_name", "study_parameters",
            "SOLVER_PARAMETERS", "simulation_options"]
 
@@ -128,35 +130,68 @@ def load_study(name: str) -> ModuleType:
     return mod
 
 
-def _coerce(value, like):
-    """Convert a command-line string to the type of the default ``like``."""
-    if not isinstance(value, str) or isinstance(like, str):
+def _type_name(like) -> str:
+    if isinstance(like, bool):
+        return "a boolean (true/false, yes/no, 1/0)"
+    if isinstance(like, int):
+        return "a number (integer)"
+    if isinstance(like, float):
+        return "a number"
+    if isinstance(like, str):
+        return "a string"
+    if isinstance(like, (list, tuple)):
+        return f"a comma-separated list of {_type_name(like[0] if len(like) else 0.0)}s"
+    return "a value"
+
+
+def _coerce(value, like, key: str = "value", unit: str = ""):
+    """Convert an override to the type of the default ``like``; StudyError naming ``key`` and the
+    expected type if it cannot be (strings from the command line are parsed)."""
+    what = f"{key} expects {_type_name(like)}{f' ({unit})' if unit and unit != '-' else ''}"
+    if isinstance(like, str):
+        if not isinstance(value, str):
+            raise StudyError(f"override {key} = {value!r}: {what}, got {type(value).__name__}")
         return value
     if isinstance(like, bool):
-        v = value.strip().lower()
+        if isinstance(value, (bool, np.bool_)):
+            return bool(value)
+        v = str(value).strip().lower()
         if v in ("1", "true", "yes", "on"):
             return True
         if v in ("0", "false", "no", "off"):
             return False
-        raise StudyError(f"cannot read {value!r} as a boolean")
-    if isinstance(like, int):
-        try:
-            return int(value)
-        except ValueError:
-            return float(value)
-    if isinstance(like, float):
-        return float(value)
+        raise StudyError(f"override {key} = {value!r}: {what}")
+    if isinstance(like, (int, float)):
+        if isinstance(value, str):
+            try:
+                value = float(value) if isinstance(like, float) else _int_or_float(value)
+            except ValueError:
+                raise StudyError(f"override {key} = {value!r}: {what}") from None
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise StudyError(f"override {key} = {value!r}: {what}, got {type(value).__name__}")
+        return float(value) if isinstance(like, float) else value
     if isinstance(like, (list, tuple)):
-        parts = [s for s in value.replace(";", ",").split(",") if s.strip()]
         elem = like[0] if len(like) else 0.0
-        return [_coerce(s.strip(), elem) for s in parts]
+        parts = ([s.strip() for s in value.replace(";", ",").split(",") if s.strip()] if isinstance(value, str)
+                 else value)
+        if not isinstance(parts, (list, tuple, np.ndarray)):
+            raise StudyError(f"override {key} = {value!r}: {what}")
+        return [_coerce(s, elem, key, unit) for s in parts]
     # unknown default type (e.g. None): try a number, else keep the string
-    for conv in (int, float):
-        try:
-            return conv(value)
-        except ValueError:
-            pass
+    if isinstance(value, str):
+        for conv in (int, float):
+            try:
+                return conv(value)
+            except ValueError:
+                pass
     return value
+
+
+def _int_or_float(text: str):
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
 
 
 def study_parameters(mod: ModuleType, resolution: str | None = None, overrides: dict | None = None) -> tuple[str, dict]:
@@ -177,5 +212,6 @@ def study_parameters(mod: ModuleType, resolution: str | None = None, overrides: 
     for k, v in (overrides or {}).items():
         if k not in valid:
             raise StudyError(f"unknown override {k!r} for study {mod.NAME!r}; valid keys: {', '.join(valid)}")
-        p[k] = _coerce(v, p.get(k))
+        unit = mod.PARAMETERS[k][1] if k in mod.PARAMETERS else getattr(mod, "RESOLUTION_PARAMETERS", {}).get(k, ("",))[0]
+        p[k] = _coerce(v, p.get(k), k, unit)
     return res, p

@@ -36,7 +36,7 @@ def _tiny_scene(p):
                        fracture_regions="bar", gamma0=1e-6, name="tiny")
 
 
-def tiny_study(final_load=0.02, du_min=1e-5, options=None):
+def tiny_study(final_load=0.02, du_min=1e-5, options=None, names=("main",)):
     mod = types.ModuleType("tiny_study")
     mod.NAME = "tiny"
     mod.TITLE = "Tiny notched bar"
@@ -49,10 +49,11 @@ def tiny_study(final_load=0.02, du_min=1e-5, options=None):
     mod.DEFAULT_RESOLUTION = "quick"
 
     def cases(p):
-        return [Case(name="main", label="tiny", scene=lambda: _tiny_scene(p),
+        return [Case(name=name, label="tiny", scene=lambda: _tiny_scene(p),
                      schedule=ngtmc.Schedule.monotonic(float(p["final_load"])),
                      control=ngtmc.AdaptiveStepControl(du_max=float(p["du_max"]), k_u=float(p["k_u"]), du_min=du_min),
-                     snapshot_loads=[0.005, 0.01], parameters={"k_u": p["k_u"]}, options=dict(options or {}))]
+                     snapshot_loads=[0.005, 0.01], parameters={"k_u": p["k_u"]}, options=dict(options or {}))
+                for name in names]
 
     mod.cases = cases
     mod.references = lambda p: [{"label": "line", "source": "none", "kind": "curve", "x": [0, 1], "y": [0, 1],
@@ -261,3 +262,39 @@ def test_sigterm_is_recorded_as_interrupted_and_resumable(full_run, tmp_path):
     run_study(tiny_study(), output=out, report=False, progress=False, threads=1, resume=True, vtk=False)
     pd.testing.assert_frame_equal(_physics(pd.read_csv(full_run / "history.csv")),
                                   _physics(pd.read_csv(out / "history.csv")), rtol=1e-9, atol=1e-12)
+
+
+def test_cli_version_and_show(capsys):
+    from ngtmc.cli import main
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"ngtmc {ngtmc.__version__}"
+    assert main(["show", "three-point-bending"]) == 0
+    out = capsys.readouterr().out
+    mod = load_study("three_point_bending")
+    assert "Three-point bending" in out and "default quick" in out
+    lines = out.splitlines()
+    e_line = next(line for line in lines if line.split()[:1] == ["E"])
+    assert e_line.split()[1:3] == ["20800", "MPa"]                 # default and unit
+    header = next(line for line in lines if line.split()[:2] == ["key", "unit"])
+    assert header.split()[2:5] == ["quick", "medium", "paper"]
+    h_band = next(line for line in lines if line.split()[:1] == ["h_band"]).split()
+    assert h_band[1] == "mm" and [float(x) for x in h_band[2:5]] == [mod.RESOLUTIONS[r]["h_band"]
+                                                                      for r in ("quick", "medium", "paper")]
+    assert main(["show", "no-such-study"]) == 2
+    assert "valid studies" in capsys.readouterr().err
+
+
+def test_history_columns_defined_once():
+    """simulation, runner, report and docs/run-directory.md agree on the history columns and units."""
+    import pathlib
+    import re
+    from ngtmc import report, runfiles, runner, simulation
+    assert simulation.HISTORY_UNITS is runfiles.HISTORY_UNITS and ngtmc.HISTORY_UNITS is runfiles.HISTORY_UNITS
+    assert runner.HISTORY_COLUMNS == ["case", *runfiles.HISTORY_UNITS]
+    assert list(report.HISTORY_COLUMNS) == runner.HISTORY_COLUMNS
+    assert all(report.HISTORY_COLUMNS[k] == u for k, u in runfiles.HISTORY_UNITS.items() if k != "force")
+    doc = (pathlib.Path(__file__).parents[1] / "docs" / "run-directory.md").read_text()
+    section = doc.split("## `history.csv`")[1].split("## ")[0]
+    documented = re.findall(r"^\| `(\w+)` \|", section, flags=re.M)
+    assert documented == runner.HISTORY_COLUMNS

@@ -1,0 +1,284 @@
+"""The files of a run folder that make a run safe to resume (format: ``docs/run-directory.md``).
+
+* Atomic writes: every file goes through a temporary file in the same folder and ``os.replace``,
+  so a crash never leaves a truncated history, metadata or checkpoint behind.
+* The physics of a run: :func:`parameters_hash` of the resolved parameters (physics, resolution
+  and solver settings), recorded in ``metadata.json`` and in every checkpoint, and
+  :func:`resume_parameters`, which refuses to resume a run with other parameters than it started
+  with (``--resume`` without ``--set`` takes the recorded overrides).
+* Checkpoints in two generations (:class:`CheckpointStore`): ``checkpoint/<case>.npz`` and the
+  one before it, ``checkpoint/<case>.prev.npz``. A file that cannot be read is named in a
+  :class:`CheckpointWarning`, moved aside to ``<file>.corrupt`` and the older generation is used.
+* A stale ``"running"`` status (the process that wrote it is gone): :func:`effective_status`.
+"""
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import os
+from pathlib import Path
+import socket
+import tempfile
+import warnings
+
+import numpy as np
+
+__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
+           "jsonable", "parameters_hash", "process_info", "effective_status", "read_metadata",
+           "resume_parameters"]
+
+#: Version of the run-folder format (``schema_version`` in metadata.json; absent means 1).
+SCHEMA_VERSION = 2
+
+#: Columns of a Simulation's history, in order, with their units (``history.csv`` has a ``case``
+#: column first). In 2D, force and energies are for the scene thickness: the force of a study run
+#: with thickness 1 mm is in N per mm (``force_unit`` in metadata.json). The one definition used
+#: by :data:`ngtmc.HISTORY_UNITS`, :data:`ngtmc.runner.HISTORY_COLUMNS` and the report.
+HISTORY_UNITS = {
+    "step": "-",
+    "load": "mm",
+    "force": "N",
+    "fracture_energy": "N mm",
+    "dissipated_energy": "N mm",
+    "elastic_energy": "N mm",
+    "regularisation_energy": "N mm",
+    "max_alpha": "-",
+    "min_J": "-",
+    "newton_iterations": "-",
+    "staggered_iterations": "-",
+    "cutbacks": "-",
+    "alpha_projected": "-",
+    "step_size": "mm",
+    "wall_time": "s",
+    "solve_time": "s",
+    "assembly_time": "s",
+}
+
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
+class CheckpointWarning(UserWarning):
+    """A checkpoint file could not be read; it was moved aside and an older generation (or a re-run
+    of that case) is used instead."""
+
+
+# ====================================================================== atomic file output
+def write_atomic(path, data: bytes | str):
+    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix="." + path.name + ".", suffix=".tmp")
+    try:
+        os.chmod(tmp, 0o666 & ~_UMASK)     # mkstemp creates 0600; give the file the usual permissions
+        with os.fdopen(fd, "wb") as f:
+            f.write(data.encode() if isinstance(data, str) else data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def jsonable(x, other=str):
+    """Plain JSON types; non-finite floats become null; any other object becomes ``other(x)``."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v, other) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v, other) for v in x]
+    if isinstance(x, np.ndarray):
+        return [jsonable(v, other) for v in x.tolist()]
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (float, np.floating)):
+        x = float(x)
+        return x if math.isfinite(x) else None
+    if x is None or isinstance(x, (int, str)):
+        return x
+    return other(x)
+
+
+def write_json(path, obj):
+    """``obj`` as indented JSON (through :func:`jsonable`), written atomically."""
+    write_atomic(path, json.dumps(jsonable(obj), indent=2, allow_nan=False) + "\n")
+
+
+def write_npz(path, arrays: dict):
+    """Compressed ``.npz`` of ``arrays``, written atomically."""
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    write_atomic(path, buf.getvalue())
+
+
+# ====================================================================== the physics of a run
+def parameters_hash(p: dict) -> str:
+    """``"sha256:<hex>"`` of the resolved parameters ``p`` (physics, resolution and solver settings)
+    in canonical JSON: equal for equal parameters, whatever their order or their origin."""
+    text = json.dumps(jsonable(p), sort_keys=True, separators=(",", ":"))
+    return "sha256:" + hashlib.sha256(text.encode()).hexdigest()
+
+
+def _show(v) -> str:
+    return "(not set)" if v is _MISSING else json.dumps(v)
+
+
+_MISSING = object()
+
+
+def _differences(recorded: dict, given: dict) -> list[str]:
+    """``["key: recorded -> given", ...]`` for every key whose JSON value differs."""
+    out = []
+    for k in sorted(set(recorded) | set(given)):
+        a, b = recorded.get(k, _MISSING), given.get(k, _MISSING)
+        a = a if a is _MISSING else jsonable(a)
+        b = b if b is _MISSING else jsonable(b)
+        if a != b:
+            out.append(f"{k}: {_show(a)} -> {_show(b)}")
+    return out
+
+
+def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides: dict | None, out: Path):
+    """Resolution, overrides and parameters of a run to resume; refuse to mix physics.
+
+    ``meta`` is the run's recorded metadata (None when unreadable: the given options are used and
+    the checkpoints' parameter hashes guard the resume). Without overrides the recorded ones are
+    taken; overrides or a resolution that differ from the recorded ones raise
+    :class:`ngtmc.study.StudyError` listing the differences (``key: recorded -> given``), as do
+    parameters that the study's code now resolves differently from the recorded values.
+    Returns ``(resolution, overrides, p)``.
+    """
+    from .study import StudyError, study_parameters
+    if not meta:
+        res, p = study_parameters(mod, resolution, overrides)
+        return res, typed_overrides(p, overrides), p
+    rec_res = meta.get("resolution")
+    if resolution is not None and rec_res is not None and resolution != rec_res:
+        raise StudyError(f"cannot resume {out}: it was started at another resolution (resolution: "
+                         f"{rec_res!r} -> {resolution!r}); resume without a resolution, or start a new run")
+    res = rec_res or resolution
+    rec_over = meta.get("overrides") or {}
+    res, p = study_parameters(mod, res, rec_over)
+    rec_typed = typed_overrides(p, rec_over)
+    if overrides:
+        _, p_given = study_parameters(mod, res, overrides)
+        diff = _differences(rec_typed, typed_overrides(p_given, overrides))
+        if diff:
+            raise StudyError(f"cannot resume {out} with other overrides than it was started with; differences "
+                             f"(key: recorded -> given): {'; '.join(diff)}. Resume without --set to continue with "
+                             "the recorded overrides, or start a new run in another folder")
+    recorded = {k: v.get("value") for k, v in (meta.get("parameters") or {}).items() if isinstance(v, dict)}
+    if recorded:
+        diff = _differences(recorded, p)
+        if diff:
+            raise StudyError(f"cannot resume {out}: the study {mod.NAME!r} now resolves other parameters than the "
+                             f"run recorded (key: recorded -> now): {'; '.join(diff)}. Start a new run")
+    elif meta.get("parameters_hash") and meta["parameters_hash"] != parameters_hash(p):
+        raise StudyError(f"cannot resume {out}: its parameters hash differs from this run's; start a new run")
+    return res, rec_typed, p
+
+
+def typed_overrides(p: dict, overrides: dict | None) -> dict:
+    """The overrides with the values they resolved to in ``p`` (strings converted to numbers)."""
+    return {k: p[k] for k in (overrides or {})}
+
+
+# ====================================================================== process and status
+def process_info() -> dict:
+    """``{"pid": ..., "host": ...}`` of this process (recorded in metadata.json to spot stale runs)."""
+    return {"pid": os.getpid(), "host": socket.gethostname()}
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:      # exists, owned by someone else
+        return True
+    return True
+
+
+def effective_status(meta: dict) -> tuple[str, str | None]:
+    """``(status, note)`` of a run from its metadata: a ``"running"`` status whose process (recorded
+    pid on this same host) no longer exists is reported as ``"interrupted"`` (resumable), with a
+    note saying why. Any other status is returned as recorded."""
+    status = str(meta.get("status") or "unknown")
+    proc = meta.get("process") or {}
+    if status != "running" or not proc.get("pid") or not proc.get("host"):
+        return status, None
+    if proc["host"] != socket.gethostname():
+        return status, f"started on host {proc['host']}, whose processes cannot be checked from here"
+    if _alive(proc["pid"]):
+        return status, f"process {proc['pid']} on {proc['host']} is alive"
+    return "interrupted", (f"recorded as running, but its process {proc['pid']} on {proc['host']} is gone "
+                           "(killed); resumable from its checkpoint")
+
+
+def read_metadata(out: Path) -> dict | None:
+    """The parsed ``metadata.json`` of a run folder, or None (with a warning when it is unreadable)."""
+    f = Path(out) / "metadata.json"
+    if not f.exists():
+        return None
+    try:
+        meta = json.loads(f.read_text())
+        return meta if isinstance(meta, dict) else None
+    except Exception as e:
+        warnings.warn(f"{f} cannot be read ({type(e).__name__}: {e}); resuming from the checkpoints alone",
+                      CheckpointWarning, stacklevel=2)
+        return None
+
+
+# ====================================================================== checkpoints
+class CheckpointStore:
+    """Checkpoints of the cases of one run, two generations each, in ``folder``.
+
+    ``save`` moves ``<case>.npz`` to ``<case>.prev.npz`` and writes the new ``<case>.npz``;
+    ``load`` returns the newest generation that ``decode`` accepts.
+    """
+
+    def __init__(self, folder: Path):
+        self.folder = Path(folder)
+
+    def files(self, case: str) -> list[Path]:
+        """Newest first: ``<case>.npz``, ``<case>.prev.npz``."""
+        return [self.folder / f"{case}.npz", self.folder / f"{case}.prev.npz"]
+
+    def save(self, case: str, arrays: dict):
+        """Write a new generation of the checkpoint of ``case`` (the previous one is kept)."""
+        cur, prev = self.files(case)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        if cur.exists():
+            os.replace(cur, prev)
+        write_npz(cur, arrays)
+
+    def load(self, case: str, decode) -> dict | None:
+        """``decode(arrays)`` of the newest readable generation of ``case``, or None if there is none.
+
+        A file that ``np.load`` or ``decode`` rejects (truncated, garbage, missing keys) is named in
+        a :class:`CheckpointWarning` and moved aside to ``<file>.corrupt``; the older generation is
+        tried next."""
+        for f in self.files(case):
+            if not f.exists():
+                continue
+            try:
+                with np.load(f, allow_pickle=False) as z:
+                    arrays = {k: z[k] for k in z.files}
+                return decode(arrays)
+            except Exception as e:
+                bad = f.with_name(f.name + ".corrupt")
+                try:
+                    os.replace(f, bad)
+                    where = f"moved to {bad.name}"
+                except OSError:
+                    where = "left in place"
+                warnings.warn(f"checkpoint {f} cannot be read ({type(e).__name__}: {e}); {where}, "
+                              "using the older generation or re-running the case", CheckpointWarning, stacklevel=2)
+        return None

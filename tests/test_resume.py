@@ -1,0 +1,203 @@
+"""Resume that cannot mix physics, on the tiny notched-bar study of test_runner.py (seconds).
+
+Overrides are recorded and compared, checkpoints keep two generations and a corrupted one is
+named and skipped, completed cases are never overwritten, a stale "running" status is recognised,
+and a refused run leaves no folder behind.
+"""
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ngtmc.runfiles import CheckpointWarning, effective_status, parameters_hash
+from ngtmc.runner import run_study
+from ngtmc.study import StudyError
+
+from test_runner import _physics, tiny_study  # noqa: E402
+
+QUIET = dict(report=False, progress=False, threads=1, vtk=False)
+
+
+def _stop_at(case, step):
+    def stop(sim, row):
+        if row["case"] == case and row["step"] == step:
+            raise KeyboardInterrupt
+    return stop
+
+
+@pytest.fixture(scope="module")
+def stiff_reference(tmp_path_factory):
+    """An uninterrupted run with E = 2000 MPa (by override)."""
+    out = tmp_path_factory.mktemp("ref") / "stiff"
+    run_study(tiny_study(), output=out, overrides={"E": "2000"}, **QUIET)
+    return out
+
+
+@pytest.fixture(scope="module")
+def two_case_reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ref") / "two"
+    run_study(tiny_study(names=("a", "b")), output=out, **QUIET)
+    return out
+
+
+def _files(out):
+    return {f.name: f.read_bytes() for f in out.iterdir() if f.is_file()}
+
+
+def test_metadata_records_overrides_hash_and_process(stiff_reference):
+    meta = json.loads((stiff_reference / "metadata.json").read_text())
+    assert meta["schema_version"] == 2
+    assert meta["overrides"] == {"E": 2000.0}            # the value it resolved to, not the string
+    assert meta["parameters"]["E"]["value"] == 2000.0
+    p = {k: v["value"] for k, v in meta["parameters"].items()}
+    assert meta["parameters_hash"] == parameters_hash(p) and meta["parameters_hash"].startswith("sha256:")
+    assert meta["process"] == {"pid": os.getpid(), "host": socket.gethostname()}
+
+
+def test_resume_takes_recorded_overrides_and_refuses_others(stiff_reference, tmp_path):
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        run_study(tiny_study(), output=out, overrides={"E": "2000"}, callbacks=[_stop_at("main", 6)],
+                  checkpoint_every=4, **QUIET)
+    before = _files(out)
+    for given, diff in [({"E": "1000"}, "E: 2000.0 -> 1000.0"),
+                        ({"E": "2000", "k_u": "30"}, "k_u: (not set) -> 30.0"),
+                        ({"h": "0.04"}, "E: 2000.0 -> (not set); h: (not set) -> 0.04")]:
+        with pytest.raises(StudyError, match="differences \\(key: recorded -> given\\): " + diff.replace("(", "\\(")
+                           .replace(")", "\\)")):
+            run_study(tiny_study(), output=out, overrides=given, resume=True, **QUIET)
+        assert _files(out) == before                      # refused before anything was written
+    with pytest.raises(StudyError, match="resolution: 'quick' -> 'medium'"):
+        run_study(tiny_study(), output=out, resolution="medium", resume=True, **QUIET)
+    # the same overrides, or none at all: continues with E = 2000 and matches the uninterrupted run
+    run_study(tiny_study(), output=out, resume=True, **QUIET)
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "completed" and meta["overrides"] == {"E": 2000.0}
+    assert meta["parameters_hash"] == json.loads((stiff_reference / "metadata.json").read_text())["parameters_hash"]
+    pd.testing.assert_frame_equal(_physics(pd.read_csv(stiff_reference / "history.csv")),
+                                  _physics(pd.read_csv(out / "history.csv")), rtol=1e-9, atol=1e-12)
+
+
+def _interrupted_two_case_run(out):
+    """Case a completed, case b interrupted at step 9 (checkpoints of b at steps 8 and 9)."""
+    with pytest.raises(KeyboardInterrupt):
+        run_study(tiny_study(names=("a", "b")), output=out, callbacks=[_stop_at("b", 9)], checkpoint_every=4,
+                  checkpoint_seconds=1e9, **QUIET)
+    ck = out / "checkpoint"
+    assert sorted(f.name for f in ck.iterdir()) == ["a.npz", "a.prev.npz", "b.npz", "b.prev.npz"]
+    return ck
+
+
+def _damage(f, how):
+    data = f.read_bytes()
+    f.write_bytes(data[: len(data) // 2] if how == "truncate" else b"garbage, not a zip file" * 10)
+
+
+@pytest.mark.parametrize("files, how, recomputed", [
+    (["b.npz"], "truncate", {"a": 0, "b": "from step 9"}),       # b goes on from its older generation (step 8)
+    (["b.npz"], "garbage", {"a": 0, "b": "from step 9"}),
+    (["b.npz", "b.prev.npz"], "garbage", {"a": 0, "b": "all"}),  # nothing left of b: b alone is re-run
+    (["a.npz"], "truncate", {"a": "some", "b": "from step 10"}),  # a goes on from its older generation
+    (["a.npz", "a.prev.npz"], "garbage", {"a": 0, "b": "from step 10"}),  # a comes from history.csv
+])
+def test_corrupted_checkpoint_is_named_and_skipped(two_case_reference, tmp_path, files, how, recomputed):
+    out = tmp_path / "run"
+    ck = _interrupted_two_case_run(out)
+    a_rows = pd.read_csv(out / "history.csv").query("case == 'a'").reset_index(drop=True)
+    for name in files:
+        _damage(ck / name, how)
+    seen = []
+    with pytest.warns(CheckpointWarning, match=f"checkpoint .*{files[0]} cannot be read") as rec:
+        run_study(tiny_study(names=("a", "b")), output=out, callbacks=[lambda s, row: seen.append(row)],
+                  resume=True, **QUIET)
+    named = " ".join(str(w.message) for w in rec)
+    assert all(name in named for name in files)
+    assert all((ck / (name + ".corrupt")).exists() for name in files)
+    steps = {c: [r["step"] for r in seen if r["case"] == c] for c in "ab"}
+    assert len(steps["a"]) == 0 if recomputed["a"] == 0 else 0 < len(steps["a"]) and min(steps["a"]) > 1
+    if recomputed["b"] == "all":
+        assert min(steps["b"]) == 1
+    else:
+        assert min(steps["b"]) == int(recomputed["b"].split()[-1])
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "completed" and set(meta["results"]) == {"a", "b"}
+    h = pd.read_csv(out / "history.csv")
+    pd.testing.assert_frame_equal(_physics(pd.read_csv(two_case_reference / "history.csv")), _physics(h),
+                                  rtol=1e-9, atol=1e-12)
+    # the completed case is intact, to the last digit written
+    pd.testing.assert_frame_equal(_physics(a_rows), _physics(h.query("case == 'a'").reset_index(drop=True)))
+
+
+def test_failure_during_resume_keeps_completed_cases(tmp_path):
+    """A resume that fails early still writes every case it had (it used to wipe them)."""
+    out = tmp_path / "run"
+    ck = _interrupted_two_case_run(out)
+    before = pd.read_csv(out / "history.csv")
+    _damage(ck / "b.npz", "garbage")
+
+    def boom(sim, row):
+        raise RuntimeError("synthetic failure")
+
+    with pytest.warns(CheckpointWarning), pytest.raises(RuntimeError, match="synthetic"):
+        run_study(tiny_study(names=("a", "b")), output=out, callbacks=[boom], resume=True, **QUIET)
+    after = pd.read_csv(out / "history.csv")
+    pd.testing.assert_frame_equal(before.query("case == 'a'"), after.query("case == 'a'"))
+    assert after.query("case == 'b'")["step"].max() >= 8        # b's rows up to its older checkpoint
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "failed" and meta["results"]["a"]["status"] == "completed"
+
+
+def _dead_pid():
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def test_stale_running_status_is_recognised(tmp_path):
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        run_study(tiny_study(), output=out, callbacks=[_stop_at("main", 5)], **QUIET)
+    meta_f = out / "metadata.json"
+    meta = json.loads(meta_f.read_text())
+    # as a SIGKILL leaves it: status "running", written by a process that is gone
+    meta["status"] = "running"
+    meta["process"] = {"pid": _dead_pid(), "host": socket.gethostname()}
+    meta_f.write_text(json.dumps(meta))
+    status, note = effective_status(meta)
+    assert status == "interrupted" and "is gone" in note
+    with pytest.raises(StudyError, match="status interrupted: .*is gone"):
+        run_study(tiny_study(), output=out, **QUIET)
+    from ngtmc.report import load_run
+    assert load_run(out)[0]["status"] == "interrupted"
+    # a live process: resuming is refused
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        meta["process"]["pid"] = live.pid
+        meta_f.write_text(json.dumps(meta))
+        assert effective_status(meta)[0] == "running"
+        with pytest.raises(StudyError, match="still running"):
+            run_study(tiny_study(), output=out, resume=True, **QUIET)
+    finally:
+        live.kill()
+        live.wait()
+    run_study(tiny_study(), output=out, resume=True, **QUIET)
+    assert json.loads(meta_f.read_text())["status"] == "completed"
+
+
+def test_refused_run_leaves_no_folder(tmp_path):
+    out = tmp_path / "run"
+    with pytest.raises(StudyError, match="case 'main': parameter E = -5.0 MPa is outside the allowed range"):
+        run_study(tiny_study(), output=out, overrides={"E": "-5"}, **QUIET)
+    assert not out.exists()
+    with pytest.raises(StudyError, match="E expects a number"):
+        run_study(tiny_study(), output=out, overrides={"E": "stiff"}, **QUIET)
+    assert not out.exists()
+    run_study(tiny_study(), output=out, overrides={"E": "1500"}, **QUIET)   # the same command, corrected
+    assert json.loads((out / "metadata.json").read_text())["status"] == "completed"
