@@ -72,8 +72,23 @@ FIELDS = (
      "0 outside the fracture regions", True),
 )
 
-# VTK cell type and vertex order of each NGSolve element type (NGSolve's vertex order is VTK's for these)
+# VTK cell type of each NGSolve element type (vertex order as NGSolve's, orientation made VTK's)
 _VTK_TYPE = {ngs.ET.TRIG: 5, ngs.ET.QUAD: 9, ngs.ET.TET: 10, ngs.ET.HEX: 12, ngs.ET.PRISM: 13, ngs.ET.PYRAMID: 14}
+
+
+# vertex permutation that reverses an element's orientation
+_FLIP = {ngs.ET.TRIG: [0, 2, 1], ngs.ET.QUAD: [0, 3, 2, 1], ngs.ET.TET: [0, 2, 1, 3],
+         ngs.ET.HEX: [0, 3, 2, 1, 4, 7, 6, 5], ngs.ET.PRISM: [0, 2, 1, 3, 5, 4], ngs.ET.PYRAMID: [0, 3, 2, 1, 4]}
+
+
+def _negative(points: np.ndarray, nodes: np.ndarray, dim: int) -> np.ndarray:
+    """Elements (rows of vertex numbers) of negative VTK orientation: in 2D clockwise, in 3D a base
+    face (the first three vertices) whose right-hand normal points away from the other vertices."""
+    p0, p1, p2 = (points[nodes[:, i]] for i in range(3))
+    n = np.cross(p1 - p0, p2 - p0)
+    if dim == 2:
+        return n[:, 2] < 0
+    return np.einsum("ij,ij->i", n, points[nodes[:, 3:]].mean(axis=1) - p0) < 0
 
 
 def _von_mises(sigma) -> ngs.CoefficientFunction:
@@ -96,16 +111,21 @@ class VtkWriter:
         pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)[:self.nv]
         self.points = np.zeros((self.nv, 3))
         self.points[:, :pts.shape[1]] = pts
-        conn, offsets, types = [], [], []
+        cells = []
         for el in mesh.Elements(ngs.VOL):
             if el.type not in _VTK_TYPE:
                 raise ValueError(f"VTK output: element type {el.type} is not supported")
-            conn.extend(v.nr for v in el.vertices)
-            offsets.append(len(conn))
-            types.append(_VTK_TYPE[el.type])
-        self.connectivity = np.asarray(conn, dtype=np.int64)
-        self.offsets = np.asarray(offsets, dtype=np.int64)
-        self.types = np.asarray(types, dtype=np.uint8)
+            cells.append((el.type, [v.nr for v in el.vertices]))
+        self.types = np.asarray([_VTK_TYPE[t] for t, _ in cells], dtype=np.uint8)
+        for t, flip in _FLIP.items():  # VTK's orientation (netgen's tetrahedra are the other way round)
+            idx = [i for i, (ti, _) in enumerate(cells) if ti == t]
+            if idx:
+                nodes = np.asarray([cells[i][1] for i in idx], dtype=np.int64)
+                nodes = np.where(_negative(self.points, nodes, s.dim)[:, None], nodes[:, flip], nodes)
+                for i, row in zip(idx, nodes):
+                    cells[i] = (t, list(row))
+        self.connectivity = np.asarray([n for _, c in cells for n in c], dtype=np.int64)
+        self.offsets = np.cumsum([len(c) for _, c in cells], dtype=np.int64)
 
         # element means: int_T f / int_T 1 with the rule the solver uses for f (L2 order 0: dof i = element i)
         l2 = ngs.L2(mesh, order=0)

@@ -54,6 +54,14 @@ def _von_mises(sig):
     return math.sqrt(0.5 * ((s1 - s2) ** 2 + (s2 - s3) ** 2 + (s3 - s1) ** 2))
 
 
+def _signed_size(m):
+    """Signed area (triangles) or volume (tetrahedra) of meshio mesh m's cells, VTK's orientation."""
+    c = m.cells[0].data
+    p = [m.points[c[:, i]] for i in range(c.shape[1])]
+    n = np.cross(p[1] - p[0], p[2] - p[0])
+    return n[:, 2] / 2 if c.shape[1] == 3 else np.einsum("ij,ij->i", n, p[3] - p[0]) / 6
+
+
 def _read(path):
     m = meshio.read(path)
     cell = {k: np.concatenate([np.ravel(b) for b in v]) for k, v in m.cell_data.items()}
@@ -75,6 +83,7 @@ def test_uniaxial_strain_displacement_and_J(tmp_path):
     # uniaxial strain: B = diag((1 + e)^2, 1, 1), von Mises = G J^(-5/3) |(1 + e)^2 - 1|
     np.testing.assert_allclose(cell["von Mises [MPa]"], G0 * (1 + e) ** (-5 / 3) * ((1 + e) ** 2 - 1), rtol=1e-9)
     np.testing.assert_allclose(cell["density [-]"], 1.0)
+    assert [b.type for b in m.cells] == ["triangle"] and np.all(_signed_size(m) > 0)  # counterclockwise
     # no fracture in this scene: no phase-field fields
     assert not FRACTURE_FIELDS & (set(m.point_data) | set(cell))
     # the displacement is the active vector of the point data (Warp By Vector picks it)
@@ -141,6 +150,7 @@ def test_cube_uniaxial_stress_3d(tmp_path):
     s = _solve(scene, 0.05)
     m, cell = _read(VtkWriter(s).write(tmp_path / "e.vtu"))
     assert [b.type for b in m.cells] == ["tetra"] and m.point_data[DISPLACEMENT].shape == (s.mesh.nv, 3)
+    assert np.all(_signed_size(m) > 0)  # VTK's orientation: (p1 - p0) x (p2 - p0) . (p3 - p0) > 0
     for x, uu in zip(m.points, m.point_data[DISPLACEMENT]):
         np.testing.assert_allclose(uu, s.u(s.mesh(*x)), rtol=0, atol=1e-12)
     # hand: F = diag(lt, lt, lz), sigma = K ln(J)/J I + G J^(-5/3) (B - tr(B)/3 I), sigma_xx = 0
