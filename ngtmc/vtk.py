@@ -8,30 +8,12 @@
 The files are VTK XML UnstructuredGrid files (inline base64 binary, the byte-count header encoded
 apart from the data as VTK itself writes them), readable by ParaView, VTK and meshio. Points are the
 mesh vertices, always with three coordinates (z = 0 in 2D); cells are the mesh's volume elements
-(triangles and quadrilaterals in 2D, tetrahedra, hexahedra, prisms and pyramids in 3D), drawn with
-straight sides.
+(triangles and quadrilaterals in 2D, tetrahedra, hexahedra, prisms and pyramids in 3D) in VTK's
+orientation, drawn with straight sides.
 
-Fields (:data:`FIELDS`; units in the names, one table in ``docs/run-directory.md``):
-
-=========================  =====  =====  =============================================================
-name                       where  unit   meaning
-=========================  =====  =====  =============================================================
-``displacement [mm]``      point  mm     u at the vertices, 3 components (z = 0 in 2D); the active
-                                         vector, so Warp By Vector uses it without further choices
-``alpha [-]``              point  -      phase field (0 intact, 1 broken); 0 outside the fracture
-                                         regions. Only if the scene models fracture
-``density [-]``            cell   -      pseudo-density rho (1 solid, 0 void)
-``J [-]``                  cell   -      det F, mean over the element
-``von Mises [MPa]``        cell   MPa    von Mises stress of the Cauchy stress of the elastic energy
-                                         (Psi_bar, degraded by g(alpha) and scaled by gamma(rho)),
-                                         mean over the element
-``Psi_plus [MPa]``         cell   MPa    tensile energy density of Eq. 6 (undegraded), mean over the
-                                         element's history points; 0 outside the fracture regions.
-                                         Only if the scene models fracture
-``H [MPa]``                cell   MPa    history max Psi_plus of Eq. 7 (committed), mean over the
-                                         element's history points; 0 outside the fracture regions.
-                                         Only if the scene models fracture
-=========================  =====  =====  =============================================================
+Fields: :data:`FIELDS` (name with its unit, point or cell data, unit, meaning, written only where
+the scene models fracture), tabled in ``docs/run-directory.md``. The displacement is the active
+vector of the point data, so ParaView's Warp By Vector uses it without choosing an array.
 
 Element means use the integration points of the displacement energy (:meth:`Solver.energy_measure`)
 for J and the stress, and the history points for Psi_plus and H, so a homogeneous state gives its

@@ -85,7 +85,7 @@ def test_uniaxial_strain_displacement_and_J(tmp_path):
     np.testing.assert_allclose(cell["density [-]"], 1.0)
     assert [b.type for b in m.cells] == ["triangle"] and np.all(_signed_size(m) > 0)  # counterclockwise
     # no fracture in this scene: no phase-field fields
-    assert not FRACTURE_FIELDS & (set(m.point_data) | set(cell))
+    assert set(m.point_data) | set(cell) == {name for name, *_ in FIELDS} - FRACTURE_FIELDS
     # the displacement is the active vector of the point data (Warp By Vector picks it)
     pd = ET.parse(path).getroot().find("UnstructuredGrid/Piece/PointData")
     assert pd.get("Vectors") == DISPLACEMENT
@@ -125,9 +125,10 @@ def test_fracture_fields(tmp_path):
     np.testing.assert_allclose(cell["Psi_plus [MPa]"], psi_plus, rtol=1e-8)
     np.testing.assert_allclose(cell["H [MPa]"], psi_plus, rtol=1e-8)  # H committed at this state, loading
     np.testing.assert_allclose(cell["J [-]"], J, rtol=1e-9)
-    # the stress is that of the degraded energy: g(alpha) (1 - alpha)^2 times the intact one
+    # the stress is that of the degraded energy: g(alpha) = (1 - alpha)^2 + residual times the intact one
     g = (1 - a[0]) ** 2 + s.scene.residual_stiffness
     np.testing.assert_allclose(cell["von Mises [MPa]"], g * G0 * J ** (-5 / 3) * _von_mises_B(l1, l2), rtol=1e-6)
+    assert set(m.point_data) | set(cell) == {name for name, *_ in FIELDS}
     assert ET.parse(path).getroot().find("UnstructuredGrid/Piece/PointData").get("Vectors") == DISPLACEMENT
 
 
@@ -231,6 +232,11 @@ def test_vtk_reader_warps(tmp_path):
 
 
 def test_fields_documented():
+    """docs/run-directory.md tables every field with its data kind, unit and when it is written."""
     doc = (Path(__file__).resolve().parents[1] / "docs" / "run-directory.md").read_text()
-    for name, where, unit, _, _ in FIELDS:
-        assert f"`{name}`" in doc, name
+    rows = {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:-1]]
+            for r in doc[doc.index("## `vtk/`"):].splitlines() if r.startswith("| `")}
+    assert list(rows) == [f"`{name}`" for name, *_ in FIELDS]
+    for name, where, unit, _, fracture_only in FIELDS:
+        data, doc_unit, _, written = rows[f"`{name}`"]
+        assert data.startswith(where) and doc_unit == unit and (written == "fracture scenes") == fracture_only, name
