@@ -11,6 +11,7 @@ import numpy as np
 
 from .runfiles import write_atomic
 from .study import Case
+from .vtk import VtkWriter, write_pvd
 
 __all__ = ["Snapshots"]
 
@@ -95,30 +96,21 @@ class Snapshots:
                 f"{name}__u": st["u"], f"{name}__alpha": st["alpha"]}
 
     def write_vtk(self, k: int, load: float):
+        """Write snapshot ``k`` (the solver's current state) as ``vtk/<case>_<k>.vtu`` (fields of
+        :mod:`ngtmc.vtk`) and update the series ``vtk/<case>.pvd``."""
         if self.vtk_dir is None:
             return
         try:
-            import ngsolve as ngs
-            s = self.solver
-            self.vtk_dir.mkdir(parents=True, exist_ok=True)
-            coefs, names = [s.u, s.rho], ["displacement", "density"]
-            if s.alpha is not None:
-                coefs.append(s.alpha)
-                names.append("alpha")
-            base = self.vtk_dir / f"{self.case.name}_{k:04d}"
-            ngs.VTKOutput(ma=s.mesh, coefs=coefs, names=names, filename=str(base), subdivision=0).Do()
+            if self._vtk is None:
+                self._vtk = VtkWriter(self.solver)
+            self._vtk.write(self.vtk_dir / f"{self.case.name}_{k:04d}.vtu")
             self.write_pvd()
         except Exception as e:  # VTK output is a convenience: never let it kill a run
             print(f"[ngtmc] VTK output failed: {e}", file=sys.stderr)
 
     def write_pvd(self):
+        """The series ``vtk/<case>.pvd`` of the snapshots written so far, the load (mm) as time."""
         if self.vtk_dir is None:
             return
-        items = []
-        for k, load in enumerate(self.loads):
-            f = self.vtk_dir / f"{self.case.name}_{k:04d}.vtu"
-            if f.exists():
-                items.append(f'    <DataSet timestep="{load:.10g}" group="" part="0" file="{f.name}"/>')
-        text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
-                "  <Collection>\n" + "\n".join(items) + "\n  </Collection>\n</VTKFile>\n")
-        write_atomic(self.vtk_dir / f"{self.case.name}.pvd", text)
+        files = [(load, f"{self.case.name}_{k:04d}.vtu") for k, load in enumerate(self.loads)]
+        write_pvd(self.vtk_dir / f"{self.case.name}.pvd", [(load, f) for load, f in files if (self.vtk_dir / f).exists()])

@@ -233,14 +233,16 @@ class Solver:
             self._compile = True  # fall back for the remaining terms too (warned once)
         return cf.Compile() if self._compile else cf
 
-    def energy_terms(self, u, alpha=None):
+    def energy_terms(self, u, alpha=None, F=None):
         """List of (name, energy density CF, region regex) of the displacement problem for field or trial u.
 
         Names: "elastic_vol", "elastic_dev" (Psi_bar parts, degraded by g(alpha) in fracture
         regions) and "regularisation" (Phi_bar). Densities in MPa, integrated over the regions.
         ``alpha``: phase field to degrade with (a trial function for the coupled problem), default
-        the solver's alpha GridFunction."""
-        F = deformation_gradient(u)
+        the solver's alpha GridFunction. ``F``: deformation gradient of the elastic terms, default
+        I + grad u; pass the 3 x 3 one of :func:`~ngtmc.materials.full_deformation_gradient` made a
+        variable (``MakeVariable``) to differentiate the energy for the stress (:mod:`ngtmc.vtk`)."""
+        F = deformation_gradient(u) if F is None else F
         terms = []
         sc = self.scene
         if self.alpha is not None:
