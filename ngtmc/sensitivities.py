@@ -53,7 +53,7 @@ import numpy as np
 import ngsolve as ngs
 
 from . import fracture
-from .materials import deformation_gradient, psi_plus
+from .materials import deformation_gradient
 from .scene import Scene
 from .simulation import Simulation
 from .discretisation import rules
@@ -623,7 +623,7 @@ class _Engine:
         self.res_forms = self._scalar_forms(self.res_pieces)
         if s.alpha is not None:
             # history: sum_k w_k z_H(x_k) Psi_plus(u, rho, p)(x_k) over the fracture regions
-            pp = psi_plus(deformation_gradient(s.u), s.K, s.G)
+            pp = s.crack_driving_density(deformation_gradient(s.u))
             self.psi_cf = pp
             piece = [(self.z_H * pp, self.dx_Hf)]
             self.hist_forms = self._scalar_forms(piece)
