@@ -12,6 +12,10 @@ so damage is not lagged by one step: the step ends in the state the paper's sing
 reaches only as its steps shrink to zero. The tangent is not symmetric (the hybrid split drives
 alpha with Psi_plus, the displacement sees g(alpha) Psi_bar), so it is factorized with UMFPACK.
 
+Psi_plus is that of ``Scene.split``; with ``Scene.formulation == "anisotropic"`` R_u degrades only
+Psi_plus (the energy g(alpha) Psi_plus + Psi_minus of :mod:`ngtmc.splits`): the monolithic scheme
+uses the scene's pair.
+
 The bounds on alpha are complementarity conditions, solved by a semi-smooth Newton method on
 mid(alpha - alpha_{n-1}, c R_alpha, alpha - 1) = 0 (c the inverse lumped (Gc/l0) mass of the
 dof): a dof is held on its bound where that is the median, else its equation R_alpha = 0 is
