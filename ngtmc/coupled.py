@@ -12,6 +12,10 @@ so damage is not lagged by one step: the step ends in the state the paper's sing
 reaches only as its steps shrink to zero. The tangent is not symmetric (the hybrid split drives
 alpha with Psi_plus, the displacement sees g(alpha) Psi_bar), so it is factorized with UMFPACK.
 
+Psi_plus is that of ``Scene.split``; with ``Scene.formulation == "anisotropic"`` R_u degrades only
+Psi_plus (the energy g(alpha) Psi_plus + Psi_minus of :mod:`ngtmc.splits`): the monolithic scheme
+uses the scene's pair.
+
 The bounds on alpha are complementarity conditions, solved by a semi-smooth Newton method on
 mid(alpha - alpha_{n-1}, c R_alpha, alpha - 1) = 0 (c the inverse lumped (Gc/l0) mass of the
 dof): a dof is held on its bound where that is the median, else its equation R_alpha = 0 is
@@ -31,7 +35,7 @@ import numpy as np
 import ngsolve as ngs
 
 from . import fracture
-from .materials import deformation_gradient, psi_bar, psi_plus
+from .materials import deformation_gradient
 from .solver import NewtonResult
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
@@ -87,22 +91,24 @@ class CoupledNewton:
 
     def _build_form(self):
         """The coupled residual form (non-symmetric). The degraded elastic energy enters as a
-        Variation on (u, alpha), which gives R_u and the alpha-residual g'(alpha) Psi_bar; the
-        hybrid formulation replaces Psi_bar there by H_n(u) (second term)."""
+        Variation on (u, alpha), which gives R_u and the alpha-residual g'(alpha) Psi_d, Psi_d the
+        degraded density (Psi_bar in the hybrid formulation, the split's Psi_plus in the
+        anisotropic one); Psi_d is replaced there by H_n(u) (second term), with Psi_plus of the
+        scene's split. So the monolithic scheme follows ``Scene.split`` and ``Scene.formulation``."""
         s = self.s
         (u, a), (v, b) = self.X.TnT()
         A = ngs.BilinearForm(self.X, symmetric=False)
         for name, density, regions in s.energy_terms(u, alpha=a):
             A += ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
         F = deformation_gradient(u)
-        pp = psi_plus(F, s.K, s.G)
+        pp = s.crack_driving_density(F)
         H_n = ngs.IfPos(pp - s.H, pp, s.H)
         dg = -2.0 * (1.0 - a)  # g'(alpha) of AT-2; the residual stiffness is a constant
         frac = s.mesh.Materials(s._frac_re)
         dxH = ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules())
         # cancel g'(alpha) Psi_bar b with the elastic terms' own rule, add g'(alpha) H_n b at the history points
         A += s._maybe_compile(dg * H_n * b) * dxH
-        A += s._maybe_compile(-dg * psi_bar(F, s.K, s.G) * b) * s.energy_measure("elastic_vol", s._frac_re)
+        A += s._maybe_compile(-dg * s.degraded_density(F) * b) * s.energy_measure("elastic_vol", s._frac_re)
         A += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(definedon=frac)
         return A
 

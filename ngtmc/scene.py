@@ -21,6 +21,7 @@ import numpy as np
 import ngsolve as ngs
 
 from .materials import Material, check_number
+from .splits import DEFAULT_FORMULATION, DEFAULT_SPLIT, check_split
 
 __all__ = ["Support", "DisplacementLoad", "Regulariser", "Scene", "ResolutionWarning"]
 
@@ -149,6 +150,16 @@ class Scene:
         every element.
     name : str
         Free label used in messages and reports.
+    split : str
+        Tension/compression split of the elastic energy in the fracture regions, one of
+        :data:`ngtmc.splits.SPLITS`: "vol-dev-J" (default, the paper's Eq. 6), "vol-dev-small"
+        (Amor et al. 2009 on the small strain), "vol-dev-log" (Amor et al. 2009 on the Hencky
+        strain; 2D), "spectral" (Miehe et al. 2010; 2D), "none" (see :mod:`ngtmc.splits`).
+    formulation : str
+        Where the split acts, one of :data:`ngtmc.splits.FORMULATIONS`: "hybrid" (default, the
+        paper's: in the history only) or "anisotropic" (also in the displacement equation: only
+        Psi_plus is degraded). The single-pass, staggered and monolithic schemes and the adjoint
+        of :mod:`ngtmc.sensitivities` all use the chosen pair.
     """
 
     mesh: ngs.Mesh
@@ -166,11 +177,14 @@ class Scene:
     order: int | None = None
     variable_order: bool = True
     name: str = "scene"
+    split: str = DEFAULT_SPLIT
+    formulation: str = DEFAULT_FORMULATION
     _checked: bool = field(default=False, repr=False)
 
     def __post_init__(self):
         if self.thickness is None and getattr(self.mesh, "dim", 2) == 2:
             self.thickness = 1.0
+        check_split(self.split, self.formulation)
 
     # ---------------------------------------------------------------- derived properties
     @property
@@ -295,6 +309,7 @@ class Scene:
                 raise ValueError(f"Scene.{name} = {v!r} is outside the allowed range: finite and > 0")
         if not (math.isfinite(self.residual_stiffness) and 0.0 <= self.residual_stiffness < 1.0):
             raise ValueError(f"Scene.residual_stiffness = {self.residual_stiffness!r} is outside the allowed range [0, 1)")
+        check_split(self.split, self.formulation, mesh.dim)
         if self.has_fracture:
             self._check_resolution()
         self._checked = True

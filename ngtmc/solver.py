@@ -27,6 +27,7 @@ from ngsolve.comp import IntegrationRuleSpace
 
 from . import contact_regularisation as creg
 from . import fracture
+from . import splits
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
 from .discretisation import lower_order_outside, real_compile, rules
 from .scene import Scene, _names
@@ -238,6 +239,9 @@ class Solver:
 
         Names: "elastic_vol", "elastic_dev" (Psi_bar parts, degraded by g(alpha) in fracture
         regions) and "regularisation" (Phi_bar). Densities in MPa, integrated over the regions.
+        With ``Scene.formulation == "anisotropic"`` the fracture regions carry instead
+        "elastic_plus" (g(alpha) Psi_plus) and "elastic_minus" (Psi_minus) of the scene's split
+        (:mod:`ngtmc.splits`; Miehe et al. 2010, Eq. 3.13).
         ``alpha``: phase field to degrade with (a trial function for the coupled problem), default
         the solver's alpha GridFunction. ``F``: deformation gradient of the elastic terms, default
         I + grad u; pass the 3 x 3 one of :func:`~ngtmc.materials.full_deformation_gradient` made a
@@ -247,8 +251,13 @@ class Solver:
         sc = self.scene
         if self.alpha is not None:
             g = fracture.degradation(self.alpha if alpha is None else alpha, sc.residual_stiffness)
-            terms.append(("elastic_vol", g * psi_vol(F, self.K), self._frac_re))
-            terms.append(("elastic_dev", g * psi_dev(F, self.G), self._frac_re))
+            if sc.formulation == "anisotropic":
+                plus, minus = splits.split_energy(sc.split, F, self.K, self.G)
+                terms.append(("elastic_plus", g * plus, self._frac_re))
+                terms.append(("elastic_minus", minus, self._frac_re))
+            else:
+                terms.append(("elastic_vol", g * psi_vol(F, self.K), self._frac_re))
+                terms.append(("elastic_dev", g * psi_dev(F, self.G), self._frac_re))
         for others in (self._high_re, self._low_re):
             if others:
                 terms.append(("elastic_vol", psi_vol(F, self.K), others))
@@ -562,10 +571,27 @@ class Solver:
         self.timings["phase_field"] += time.perf_counter() - t0
         return projected
 
+    def crack_driving_density(self, F) -> ngs.CoefficientFunction:
+        """Psi_plus of the scene's split (:mod:`ngtmc.splits`; default the paper's Eq. 6), MPa:
+        what the history H_n = max(H_{n-1}, Psi_plus(u_n)) of Eq. 7 takes in, for every
+        formulation. F: deformation gradient (CF of a GridFunction or a trial function)."""
+        sc = self.scene
+        if sc.split == splits.DEFAULT_SPLIT:
+            return psi_plus(F, self.K, self.G)
+        return splits.split_energy(sc.split, F, self.K, self.G)[0]
+
+    def degraded_density(self, F) -> ngs.CoefficientFunction:
+        """The energy density that g(alpha) multiplies in the fracture regions, MPa: Psi_bar of
+        Eq. 2 in the hybrid formulation, the split's Psi_plus in the anisotropic one."""
+        if self.scene.formulation == "anisotropic":
+            return splits.split_energy(self.scene.split, F, self.K, self.G)[0]
+        return psi_vol(F, self.K) + psi_dev(F, self.G)
+
     def psi_plus_values(self) -> np.ndarray:
-        """Psi_plus(u) (Eq. 6) at the history quadrature points, MPa (a copy)."""
+        """Psi_plus(u) of the scene's split (Eq. 6 by default) at the history quadrature points,
+        MPa (a copy)."""
         F = deformation_gradient(self.u)
-        self._scratch_irs.Interpolate(psi_plus(F, self.K, self.G))
+        self._scratch_irs.Interpolate(self.crack_driving_density(F))
         return self._scratch_irs.vec.FV().NumPy().copy()
 
     def trial_history(self) -> np.ndarray:

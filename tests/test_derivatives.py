@@ -97,3 +97,67 @@ def test_phase_field_equation_is_the_derivative_of_its_energy(mesh):
     lin_res = alpha.vec.CreateVector()
     lin_res.data = A.mat * alpha.vec - f.vec
     assert np.linalg.norm(r.FV().NumPy() - lin_res.FV().NumPy()) < 1e-10 * np.linalg.norm(r.FV().NumPy())
+
+
+# ---------------------------------------------------------------------- energy splits (ngtmc.splits)
+from ngtmc import splits as _splits  # noqa: E402
+
+
+@pytest.mark.parametrize("name", _splits.SPLITS)
+@pytest.mark.parametrize("part", [0, 1], ids=["plus", "minus"])
+def test_split_parts_on_random_states(mesh, name, part):
+    """Residual and tangent of int Psi_plus and int Psi_minus (what the anisotropic formulation puts
+    into Newton) on a random field: at its quadrature points the principal strains, tr eps and
+    ln J take both signs, so every branch of the splits is crossed."""
+    if (name, part) == ("none", 1):
+        pytest.skip("Psi_minus of 'none' is identically zero")
+    fes = ngs.VectorH1(mesh, order=2)
+    u = _random_state(fes, 0.02, 13)
+    err_r, err_K = fd_check(fes, lambda w: _splits.split_energy(name, ngs.Id(2) + ngs.Grad(w), 1000.0, 300.0)[part], u)
+    assert err_r < 1e-7
+    assert err_K < 1e-5
+
+
+@pytest.mark.parametrize("name", ["spectral", "vol-dev-log"])
+@pytest.mark.parametrize("stretch", [0.0, 0.01, -0.01])
+def test_split_derivatives_at_equal_eigenvalues(mesh, name, stretch):
+    """u = stretch (x, y): equal principal strains at every point (stretch = 0: the undeformed
+    state Newton starts from). Residual and tangent stay finite; those of Psi_plus + Psi_minus
+    match finite differences (each part alone has a kink in its second derivative at u = 0)."""
+    fes = ngs.VectorH1(mesh, order=1)
+    u = ngs.GridFunction(fes)
+    u.Set(ngs.CF((stretch * ngs.x, stretch * ngs.y)))
+
+    def total(w):
+        plus, minus = _splits.split_energy(name, ngs.Id(2) + ngs.Grad(w), 1000.0, 300.0)
+        return plus + minus
+
+    err_r, err_K = fd_check(fes, total, u, eps=1e-7)
+    assert np.isfinite(err_r) and np.isfinite(err_K)
+    assert err_r < 1e-6 or stretch == 0.0  # at u = 0 the energy and its gradient vanish
+    assert err_K < 1e-5
+    for part in (0, 1):
+        a = ngs.BilinearForm(fes, symmetric=True)
+        a += ngs.Variation(_splits.split_energy(name, ngs.Id(2) + ngs.Grad(fes.TrialFunction()), 1000.0, 300.0)[part] * ngs.dx)
+        a.AssembleLinearization(u.vec)
+        r = u.vec.CreateVector()
+        a.Apply(u.vec, r)
+        assert np.all(np.isfinite(r.FV().NumPy()))
+        assert np.all(np.isfinite(a.mat.AsVector().FV().NumPy()))
+
+
+@pytest.mark.parametrize("name", ["vol-dev-J", "spectral"])
+def test_anisotropic_degraded_energy_with_fixed_phase_field(mesh, name):
+    """g(alpha) Psi_plus + Psi_minus, the fracture regions' energy of the anisotropic formulation."""
+    fes = ngs.VectorH1(mesh, order=1)
+    alpha = ngs.GridFunction(ngs.H1(mesh, order=1))
+    alpha.vec.FV().NumPy()[:] = np.random.default_rng(5).uniform(0, 1, alpha.space.ndof)
+    u = _random_state(fes, 0.02, 4)
+    g = fracture.degradation(alpha, 1e-6)
+
+    def energy(w):
+        plus, minus = _splits.split_energy(name, ngs.Id(2) + ngs.Grad(w), 1000.0, 300.0)
+        return g * plus + minus
+
+    err_r, err_K = fd_check(fes, energy, u)
+    assert err_r < 1e-7 and err_K < 1e-5

@@ -12,11 +12,16 @@ from ngtmc.coupled import CoupledNewton
 from scenes import notched_plate, tension_bar
 
 
-def _damaged_state(seed=0):
+#: (split, formulation) pairs the coupled form is checked with: the default and two others
+#: (the monolithic scheme follows Scene.split and Scene.formulation)
+SPLIT_CASES = [("vol-dev-J", "hybrid"), ("vol-dev-small", "hybrid"), ("spectral", "anisotropic")]
+
+
+def _damaged_state(seed=0, split="vol-dev-J", formulation="hybrid"):
     """Notched plate (order 1) with a random displacement, a random alpha in [0, 0.6] and a random
     committed history: some history points have Psi_plus above H_{n-1} (the max is active),
     others below."""
-    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))
+    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1, split=split, formulation=formulation))
     rng = np.random.default_rng(seed)
     s.u.Set(ngs.CF((2e-3 * ngs.x * ngs.y, 3e-3 * ngs.y + 1e-3 * ngs.x ** 2)))
     s.alpha.vec.FV().NumPy()[:] = rng.uniform(0.0, 0.6, s.fes_a.ndof)
@@ -28,8 +33,9 @@ def _damaged_state(seed=0):
     return s, c
 
 
-def test_coupled_residual_is_the_hybrid_system_with_the_current_history():
-    s, c = _damaged_state()
+@pytest.mark.parametrize("split,formulation", SPLIT_CASES)
+def test_coupled_residual_is_the_hybrid_system_with_the_current_history(split, formulation):
+    s, c = _damaged_state(0, split, formulation)
     r = c.x.vec.CreateVector()
     c.form.Apply(c.x.vec, r)
     R = r.FV().NumPy()
@@ -49,10 +55,11 @@ def test_coupled_residual_is_the_hybrid_system_with_the_current_history():
     np.testing.assert_allclose(R[c.nu:], ra_vec.FV().NumPy(), rtol=0, atol=1e-10 * np.abs(ra_vec.FV().NumPy()).max())
 
 
-def test_coupled_tangent_is_the_derivative_of_the_residual():
+@pytest.mark.parametrize("split,formulation", SPLIT_CASES)
+def test_coupled_tangent_is_the_derivative_of_the_residual(split, formulation):
     """Central finite differences of the residual along a random direction against the assembled
     (non-symmetric) tangent."""
-    s, c = _damaged_state(1)
+    s, c = _damaged_state(1, split, formulation)
     x = c.x.vec
     rng = np.random.default_rng(3)
     v = x.CreateVector()
