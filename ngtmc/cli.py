@@ -5,6 +5,7 @@
     ngtmc show three-point-bending
     ngtmc run three-point-bending --resolution medium --set k_u=50 --set du_max=1e-3
     ngtmc run three-point-bending --output reports/tpb --resume
+    ngtmc run path/to/my_study.py --resolution quick
     ngtmc report reports/three_point_bending-quick
     ngtmc report --index runs
 
@@ -41,8 +42,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--version", action="version", version=f"ngtmc {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
 
-    r = sub.add_parser("run", help="run a named study into a run folder")
-    r.add_argument("name", help="study name (dashes or underscores; see `ngtmc list`)")
+    r = sub.add_parser("run", help="run a named study, or a study file of your own, into a run folder")
+    r.add_argument("name", help="study name (dashes or underscores; see `ngtmc list`), or the path of a study "
+                               "file (.py, the interface of docs/study-interface.md)")
     r.add_argument("--resolution", "-r", default=None, help="quick (default), medium, paper, ...")
     r.add_argument("--output", "-o", default=None, help="run folder (default reports/<study>-<resolution>)")
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",

@@ -41,6 +41,7 @@ import pandas as pd
 from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, CheckpointStore, effective_status, jsonable,
                        parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
                        write_atomic, write_json, write_npz)
+from .plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput, force_unit
 from .scene import _names
 from .snapshots import Snapshots
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
@@ -170,43 +171,6 @@ def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Pa
     return max(cands, key=lambda d: d.stat().st_mtime) if cands else None
 
 
-# ====================================================================== progress
-class _Progress:
-    """Progress line on stderr about every ``interval`` seconds (and at the end of each case)."""
-
-    def __init__(self, enabled, study: str, n_cases: int, interval: float = 5.0):
-        self.enabled = enabled
-        self.study = study
-        self.n_cases = n_cases
-        self.interval = interval
-        self.last = -1e9
-
-    def say(self, text: str):
-        if self.enabled:
-            print(f"[ngtmc {self.study}] {text}", file=sys.stderr, flush=True)
-
-    def step(self, k: int, case: str, sim, row: dict, force_print: bool = False):
-        if not self.enabled:
-            return
-        if callable(self.enabled) and not isinstance(self.enabled, bool):
-            self.enabled(dict(row, case=case))
-            return
-        now = time.perf_counter()
-        if not force_print and now - self.last < self.interval:
-            return
-        self.last = now
-        total = sim.schedule.total_time
-        frac = sim.t / total if total > 0 else 1.0
-        el = float(row.get("wall_time", 0.0))
-        eta = ""
-        if 0.02 < frac < 1.0 and el > 0:
-            eta = f", about {el * (1 - frac) / frac:.0f} s left in this case at this pace"
-        print(f"[ngtmc {self.study}] case {k + 1}/{self.n_cases} {case}: step {row['step']:5d}  "
-              f"load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  force {row['force']:.5g}  "
-              f"Newton {row['newton_iterations']}  cut-backs {row['cutbacks']}  {100 * frac:5.1f} %  "
-              f"{el:.0f} s{eta}", file=sys.stderr, flush=True)
-
-
 # ====================================================================== the run
 class _Run:
     def __init__(self, mod, resolution, p, out: Path, overrides, progress, checkpoint_every, checkpoint_seconds,
@@ -227,7 +191,11 @@ class _Run:
         names = [c.name for c in self.cases]
         if len(set(names)) != len(names):
             raise StudyError(f"study {mod.NAME!r}: case names are not unique: {names}")
-        self.progress = _Progress(progress, mod.NAME, len(self.cases))
+        self.progress_setting = progress
+        self.progress = Progress(progress, f"[ngtmc {mod.NAME}]")
+        self.force_unit: str | None = None      # of the first scene built (ngtmc.plugins.force_unit)
+        self.thickness: float | None = None
+        self.simulations: dict = {}             # case -> the Simulation that computed it in this process
         self.rows: dict[str, list[dict]] = {}
         self.snaps: dict[str, dict] = {}      # case -> arrays for snapshots.npz
         self.results: dict[str, dict] = {}
@@ -279,8 +247,9 @@ class _Run:
 
     def metadata(self) -> dict:
         mod, p = self.mod, self.p
-        thickness = float(p.get("thickness", 1.0))
         dim = 2 if self.mesh is None else self.mesh.get("dim", 2)
+        thickness = self.thickness if self.force_unit is not None else (
+            float(p.get("thickness", 1.0)) if dim == 2 else None)
         meta = {
             "study": mod.NAME,
             "title": getattr(mod, "TITLE", mod.NAME),
@@ -293,7 +262,7 @@ class _Run:
             "git_revision": _git_revision(),
             "units": dict(_UNITS),
             "thickness_mm": thickness,
-            "force_unit": "N/mm" if dim == 2 else "N",
+            "force_unit": self.force_unit or force_unit(dim, thickness),
             "parameters": _parameter_table(mod, p),
             "overrides": self.overrides,
             "parameters_hash": self.hash,
@@ -441,14 +410,14 @@ class _Run:
         is created or any step solved; raise StudyError naming the case and the parameter."""
         import inspect
         from .simulation import Simulation
-        from .stepping import AdaptiveStepControl, Schedule
+        from .stepping import AdaptiveStepControl, ChangeControl, Schedule
         allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
         for case in self.cases:
             if case.name in self.results or case.run is not None:
                 continue
             try:
-                if case.control is not None and not isinstance(case.control, AdaptiveStepControl):
-                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl or None, got "
+                if case.control is not None and not isinstance(case.control, (AdaptiveStepControl, ChangeControl)):
+                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl, an ngtmc.ChangeControl or None, got "
                                     f"{type(case.control).__name__} {case.control!r}")
                 if not isinstance(case.schedule, Schedule):
                     case.schedule = Schedule.monotonic(float(case.schedule))
@@ -499,9 +468,11 @@ class _Run:
         if self.mesh is None:
             self.mesh = dict(mesh_info)
         cm = {"mesh": {k_: v for k_, v in mesh_info.items() if k_ != "dim"}, "setup_time_s": build_time}
+        if self.force_unit is None:
+            self.force_unit = sim.force_unit
+            self.thickness = scene.thickness
         if case.control is not None:
-            cm["control"] = {"du_max": case.control.du_max, "k_u": case.control.k_u, "du_min": case.control.du_min,
-                             "n_s": case.control.n_s}
+            cm["control"] = {a: getattr(case.control, a) for a in _CONTROL_SETTINGS if hasattr(case.control, a)}
         cm["schedule"] = [float(x) for x in sim.schedule.points]
         cm["options"] = {k_: v for k_, v in (case.options or {}).items() if isinstance(v, (int, float, str, bool))}
         self.case_meta[case.name] = cm
@@ -518,26 +489,23 @@ class _Run:
             self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: resuming from step {sim.step} "
                               f"(load {sim.solver.load:.6g} mm)")
         self.rows[case.name] = sim.rows
-        last = {"state": sim.get_state(), "ck_step": sim.step, "ck_time": time.perf_counter(),
-                "prev_load": float(sim.rows[-1]["load"])}
+        self.simulations[case.name] = sim
 
-        def after_step(s, row):
-            snaps.maybe_take(last["prev_load"], row, final=s.finished)
-            last["prev_load"] = float(row["load"])
-            last["state"] = s.get_state()
-            self.progress.step(k, case.name, s, row, force_print=s.finished)
-            now = time.perf_counter()
-            if (s.step - last["ck_step"] >= self.checkpoint_every or now - last["ck_time"] >= self.checkpoint_seconds):
-                self.snaps[case.name] = snaps.arrays(case.name)
-                cm["cpu_time_s"] = time.process_time() - cpu0
-                self.save_checkpoint(case, last["state"], snaps, done=False)
-                self.write_all()
-                last["ck_step"], last["ck_time"] = s.step, time.perf_counter()
-            for cb in self.callbacks:
-                cb(s, dict(row, case=case.name))
+        def save(state):
+            self.snaps[case.name] = snaps.arrays(case.name)
+            cm["cpu_time_s"] = time.process_time() - cpu0
+            self.save_checkpoint(case, state, snaps, done=False)
+            self.write_all()
+
+        checkpoints = CheckpointOutput(sim, save, self.checkpoint_every, self.checkpoint_seconds)
+        plugins = [SnapshotOutput(snaps, float(sim.rows[-1]["load"])),
+                   Progress(self.progress_setting, f"[ngtmc {self.mod.NAME}] case {k + 1}/{len(self.cases)} "
+                            f"{case.name}:", sim.force_unit, case=case.name),
+                   checkpoints, RowCallbacks(self.callbacks, case.name)]
+        last = checkpoints     # .state: the state of the last accepted step
 
         def finish(status, error=None):
-            state = last["state"]
+            state = last.state
             self.rows[case.name] = [dict(r) for r in state["rows"]]
             res = case_results(pd.DataFrame(self.rows[case.name]))
             res["status"] = status
@@ -552,7 +520,7 @@ class _Run:
             self.save_checkpoint(case, state, snaps, done=(status == "completed"))
 
         try:
-            sim.run(callbacks=[after_step])
+            sim.run(callbacks=plugins)
         except StepFailure as e:
             finish("failed", str(e))
             raise
@@ -564,11 +532,11 @@ class _Run:
             raise
         if not snaps.steps or snaps.steps[-1] != sim.step:
             snaps.take(sim.rows[-1])
-        last["state"] = sim.get_state()
+        last.state = sim.get_state()
         finish("completed")
         r = self.results[case.name]
         self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: done, {r['steps']} steps, "
-                          f"peak force {r['peak_force']:.5g} at {r['peak_load']:.5g} mm, {r.get('wall_time_s', 0):.0f} s")
+                          f"peak force {r['peak_force']:.5g} {sim.force_unit} at {r['peak_load']:.5g} mm, {r.get('wall_time_s', 0):.0f} s")
         self.write_all()
 
     # ------------------------------------------------------------ whole run
@@ -598,6 +566,10 @@ class _Run:
             raise
         self.status = "completed"
         self.write_all()
+
+
+#: settings of a step control recorded in the metadata (those the control has)
+_CONTROL_SETTINGS = ("du_max", "k_u", "du_min", "n_s", "newton_target", "growth", "dalpha_target", "du_first")
 
 
 def _threads():
@@ -650,6 +622,14 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     solved, for bad input (unknown study, resolution or override, ill-typed or out-of-range
     values, a bad scene, threads < 1) or a resume that would mix parameters.
     """
+    return _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
+                    checkpoint_seconds, vtk, callbacks).out
+
+
+def _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
+             checkpoint_seconds, vtk, callbacks) -> "_Run":
+    """The work of :func:`run_study`; returns the finished run (its folder ``out``, and the
+    Simulation of each case computed in this process in ``simulations``)."""
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
                                 or threads < 1):
         raise StudyError(f"threads = {threads!r} is not allowed: give an integer >= 1 (NGSolve threads), "
@@ -703,7 +683,7 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
     if report or report is None:
         _render(out, strict=bool(report))
-    return out
+    return run
 
 
 class _terminate_as_interrupt:
@@ -746,3 +726,128 @@ def _render(out: Path, strict: bool):
             raise
         print(f"[ngtmc] report not rendered: {type(e).__name__}: {e}", file=sys.stderr)
         return None
+
+
+# ====================================================================== a user's own scene
+def _scene_parameters(scene, schedule, control, options: dict) -> dict:
+    """PARAMETERS (name -> (value, unit, description)) describing a scene, its schedule, step control
+    and options: what the run folder records, and what a resume compares."""
+    import dataclasses
+    import hashlib
+    out = {}
+    for region, m in scene.materials.items():
+        out[f"{region}.E"] = (float(m.E), "MPa", f"Young's modulus in region {region!r}")
+        out[f"{region}.nu"] = (float(m.nu), "-", f"Poisson's ratio in region {region!r}")
+        if scene.has_fracture:
+            out[f"{region}.Gc"] = (float(m.Gc), "N/mm", f"critical energy release rate in region {region!r}")
+            out[f"{region}.l0"] = (float(m.l0), "mm", f"phase-field length scale in region {region!r}")
+    out["fracture_regions"] = (", ".join(scene.fracture_region_names) or "none", "-",
+                               "regions where the phase field lives (regular expressions)")
+    if scene.has_fracture:
+        out["split"] = (str(scene.split), "-", "tension/compression split of the elastic energy")
+        out["formulation"] = (str(scene.formulation), "-", "where the split acts")
+    if isinstance(scene.density, dict) or hasattr(scene.density, "items"):
+        for region, v in scene.density.items():
+            out[f"rho.{region}"] = (float(v), "-", f"pseudo-density in region {region!r} (1 solid, 0 void)")
+    elif scene.density is not None:
+        rho = np.asarray(scene.density, dtype=float).ravel()
+        out["rho"] = (f"{rho.size} values, sha256:{hashlib.sha256(rho.tobytes()).hexdigest()[:16]}", "-",
+                      "pseudo-density per element (1 solid, 0 void)")
+    if scene.has_void:
+        out["gamma0"] = (float(scene.gamma0), "-", "void stiffness ratio (Eq. 17)")
+    if scene.has_fracture and scene.has_void:
+        out["gc_a"] = (float(scene.gc_a), "-", "toughness interpolation parameter a (Eq. 18)")
+        out["gc_b"] = (float(scene.gc_b), "-", "toughness interpolation parameter b (Eq. 18)")
+    out["residual_stiffness"] = (float(scene.residual_stiffness), "-", "added to the degradation g(alpha)")
+    if scene.regulariser is not None:
+        r = scene.regulariser
+        out["regulariser_regions"] = (", ".join(_names(r.regions)), "-", "regions of the contact regulariser")
+        out["regulariser_length"] = (float(r.length), "mm", "characteristic length L of the regulariser")
+        out["kbar_r"] = (float(r.kbar_r), "-", "regulariser factor")
+        out["regulariser_damping"] = (str(r.damping), "-", "damping of the regulariser")
+    if scene.dim == 2:
+        out["thickness"] = (float(scene.thickness), "mm", "out-of-plane thickness (plane strain)")
+    out["displacement_order"] = (int(scene.displacement_order), "-", "polynomial order of the displacement")
+    mesh = scene.mesh
+    coords = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
+    out["mesh"] = (f"{mesh.ne} elements, {mesh.nv} vertices, sha256:"
+                   f"{hashlib.sha256(coords.tobytes()).hexdigest()[:16]}", "-", "the mesh (vertex coordinates hashed)")
+    out["supports"] = ("; ".join(f"{s.boundary}: " + "".join(a for a in "xyz" if getattr(s, a, False))
+                                 for s in scene.supports), "-", "held boundaries and components")
+    out["load"] = (f"{scene.load.boundary}: {scene.load.direction}"
+                   + (", tangential held" if scene.load.hold_tangential else ""), "-",
+                   "loaded boundary and direction")
+    out["schedule"] = ([float(x) for x in schedule.points], "mm", "load schedule (turning points)")
+    if control is not None:
+        for a in _CONTROL_SETTINGS:
+            v = getattr(control, a, None)
+            if v is not None:
+                out[f"control.{a}"] = (v, {"du_max": "mm", "du_min": "mm", "du_first": "mm", "k_u": "1/N"}.get(a, "-"),
+                                       f"step control {type(control).__name__}: {a}")
+    for k, v in options.items():
+        if isinstance(v, (int, float, str, bool)):
+            out[f"option.{k}"] = (v, "-", f"Simulation option {k}")
+    return out
+
+
+def scene_study(scene, schedule, control=None, *, name: str | None = None, title: str | None = None,
+                summary: str | None = None, snapshot_loads: Sequence[float] | None = None,
+                references: Sequence[dict] = (), targets: Sequence[dict] = (), **options) -> ModuleType:
+    """A one-case study module (the interface of ``docs/study-interface.md``) around a user's own
+    scene, so that the runner writes its run folder as for a named study.
+
+    ``name`` defaults to ``scene.name``; ``snapshot_loads`` (mm) default to 8 loads evenly along the
+    schedule; ``references`` and ``targets`` in the metadata format; ``options``: keyword arguments
+    of :class:`ngtmc.Simulation` (e.g. ``scheme``). PARAMETERS describe the scene, schedule and
+    control (materials, densities, mesh, ...), so a resume with another scene is refused.
+    """
+    from .stepping import Schedule
+    if not isinstance(schedule, Schedule):
+        from .materials import check_number
+        check_number("schedule (a Schedule, or the final load)", schedule, "mm")
+        schedule = Schedule.monotonic(float(schedule))
+    if snapshot_loads is None:
+        total = schedule.total_time
+        snapshot_loads = [float(schedule.load(t)) for t in np.linspace(0.0, total, 9)[1:]]
+    study_name = normalise_name(name or getattr(scene, "name", None) or "scene")
+    mod = ModuleType(f"ngtmc_scene_{study_name}")
+    mod.NAME = study_name
+    mod.TITLE = title or f"Scene {study_name}"
+    mod.SUMMARY = summary or (f"Scene {study_name!r} ({scene.dim}D, {scene.mesh.ne} elements"
+                              f"{', with fracture' if scene.has_fracture else ''}"
+                              f"{', with a third medium (void)' if scene.has_void else ''}), loaded along "
+                              f"{[float(x) for x in schedule.points]} mm.")
+    mod.PARAMETERS = _scene_parameters(scene, schedule, control, options)
+    mod.RESOLUTIONS = {"custom": {}}
+    mod.DEFAULT_RESOLUTION = "custom"
+    case = Case(name="main", label=getattr(scene, "name", None) or study_name, scene=scene, schedule=schedule,
+                control=control, options=dict(options), snapshot_loads=list(snapshot_loads))
+    mod.cases = lambda p: [case]
+    mod.references = lambda p: list(references)
+    mod.targets = lambda p: list(targets)
+    return mod
+
+
+def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, *, resume: bool = False,
+              report: bool | None = None, progress: bool | Callable = False, vtk: bool = True,
+              threads: int | None = None, checkpoint_every: int = 25, checkpoint_seconds: float = 30.0,
+              callbacks: Sequence[Callable] = (), name: str | None = None, title: str | None = None,
+              summary: str | None = None, snapshot_loads: Sequence[float] | None = None,
+              references: Sequence[dict] = (), targets: Sequence[dict] = (), **options):
+    """Run a user's own scene into the run folder ``out_dir``, with the machinery of a named study
+    (history.csv, metadata.json, snapshots.npz, vtk/, checkpoint/, report.html); see
+    :func:`scene_study` and :func:`run_study`. Returns the :class:`ngtmc.SimulationResult`, its
+    ``run_dir`` set. ``ngtmc.simulate(..., out_dir=...)`` calls this."""
+    from .simulation import HISTORY_UNITS, SimulationResult
+    if out_dir is None:
+        raise StudyError("run_scene needs out_dir, the run folder to write")
+    mod = scene_study(scene, schedule, control, name=name, title=title, summary=summary,
+                      snapshot_loads=snapshot_loads, references=references, targets=targets, **options)
+    run = _execute(mod, None, out_dir, None, report, resume, progress, threads, checkpoint_every,
+                   checkpoint_seconds, vtk, callbacks)
+    sim = run.simulations.get("main")
+    rows = run.rows.get("main") or []
+    history = pd.DataFrame(rows).reindex(columns=list(HISTORY_UNITS))
+    return SimulationResult(history, dict(HISTORY_UNITS), sim.solver if sim is not None else None,
+                            float(run.results.get("main", {}).get("wall_time_s") or run.wall_time()),
+                            run_dir=run.out)

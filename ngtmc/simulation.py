@@ -63,6 +63,8 @@ class SimulationResult:
     units: dict
     solver: Solver
     wall_time: float
+    #: the run folder, for ``simulate(..., out_dir=...)``; None for a run kept in memory
+    run_dir: "Path | None" = None
 
     @property
     def peak_force(self) -> float:
@@ -99,7 +101,8 @@ class Simulation:
         and ``newton_every`` (default 10) of its staggered fallback (see ``_attempt_monolithic``).
     newton : NewtonOptions, optional
     progress : bool or callable
-        True prints a progress line to stderr about every 5 s; a callable receives each row dict.
+        True prints a progress line to stderr about every 5 s (:class:`ngtmc.plugins.Progress`, the
+        one progress printer of ngtmc); a callable receives each row dict.
     max_steps : int
         Safety limit on accepted steps.
     compile : "auto", True, "real" or False
@@ -156,7 +159,10 @@ class Simulation:
         self._wf_prev = 0.0
         self._elapsed_before = 0.0
         self._t_start = None
-        self._last_print = 0.0
+        from .plugins import Progress, force_unit
+        #: force unit of this scene's history (:func:`ngtmc.plugins.force_unit`)
+        self.force_unit = force_unit(scene.dim, scene.thickness)
+        self._progress = Progress(progress, "[ngtmc]", self.force_unit)
         self._record(step_size=0.0, newton_iterations=0, staggered_iterations=0, cutbacks=0,
                      solve_time=0.0, assembly_time=0.0, projected=0)
 
@@ -405,21 +411,8 @@ class Simulation:
         return row
 
     def _report_progress(self, row):
-        if not self.progress:
-            return
-        if callable(self.progress):
-            self.progress(row)
-            return
-        now = time.perf_counter()
-        if now - self._last_print < 5.0 and not self.finished:
-            return
-        self._last_print = now
-        frac = self.t / self.schedule.total_time
-        el = self._elapsed()
-        eta = f", about {el * (1 - frac) / frac:.0f} s left at this pace" if 0.02 < frac < 1 else ""
-        print(f"[ngtmc] step {row['step']:5d}  load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  "
-              f"force {row['force']:.5g} N  max alpha {row['max_alpha']:.3f}  Newton {row['newton_iterations']}"
-              f"  cut-backs {row['cutbacks']}  {100 * frac:5.1f} %  {el:.0f} s{eta}", file=sys.stderr, flush=True)
+        if self.progress:
+            self._progress.step(self, row)
 
     # ------------------------------------------------------------------ whole run
     def run(self, callbacks: Sequence[Callable[["Simulation", dict], None]] = ()) -> SimulationResult:
@@ -465,7 +458,21 @@ class Simulation:
         self.rows = [dict(r) for r in st["rows"]]
 
 
-def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None, **options) -> SimulationResult:
-    """Run ``scene`` through ``schedule`` and return the :class:`SimulationResult` (shortcut for
-    ``Simulation(scene, schedule, control, **options).run()``)."""
+def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
+             out_dir=None, **options) -> SimulationResult:
+    """Run ``scene`` through ``schedule`` and return the :class:`SimulationResult`.
+
+    Without ``out_dir``: a shortcut for ``Simulation(scene, schedule, control, **options).run()``,
+    the history kept in memory.
+
+    With ``out_dir`` (a folder): the run folder of a named study is written there by the same
+    machinery (:func:`ngtmc.runner.run_scene`): ``history.csv``, ``metadata.json``,
+    ``snapshots.npz``, ``vtk/``, ``checkpoint/`` and ``report.html`` (``docs/run-directory.md``).
+    Further keywords then: ``resume``, ``report``, ``vtk``, ``progress``, ``threads``,
+    ``callbacks``, ``name``, ``title``, ``summary``, ``snapshot_loads`` (mm), ``references``,
+    ``targets``; the rest go to :class:`Simulation`. The result's ``run_dir`` is the folder.
+    """
+    if out_dir is not None:
+        from .runner import run_scene
+        return run_scene(scene, schedule, control, out_dir, **options)
     return Simulation(scene, schedule, control, **options).run()

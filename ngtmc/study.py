@@ -21,7 +21,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["Case", "StudyError", "list_studies", "load_study", "normalise_name", "study_parameters",
+__all__ = ["Case", "StudyError", "list_studies", "load_study", "load_study_file", "normalise_name", "study_parameters",
            "SOLVER_PARAMETERS", "simulation_options"]
 
 #: Solver settings a study exposes next to its physics (``**SOLVER_PARAMETERS`` in PARAMETERS):
@@ -114,19 +114,51 @@ def list_studies() -> list[str]:
     return sorted(names)
 
 
+def load_study_file(path) -> ModuleType:
+    """Import a user's study file (a ``.py`` file with the interface of ``docs/study-interface.md``).
+
+    Raises :class:`StudyError` if the file does not exist, cannot be imported or lacks a name."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+    f = Path(path)
+    if not f.is_file():
+        raise StudyError(f"study file {str(path)!r} does not exist")
+    modname = "ngtmc_user_study_" + "".join(ch if ch.isalnum() else "_" for ch in f.stem)
+    spec = importlib.util.spec_from_file_location(modname, f)
+    if spec is None or spec.loader is None:
+        raise StudyError(f"study file {str(path)!r} cannot be imported (not a Python file)")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[modname] = mod
+    try:
+        spec.loader.exec_module(mod)
+    except Exception as e:
+        sys.modules.pop(modname, None)
+        raise StudyError(f"study file {str(path)!r} cannot be imported: {type(e).__name__}: {e}") from e
+    _check_study(mod, str(f))
+    return mod
+
+
+def _check_study(mod: ModuleType, where: str):
+    missing = [a for a in ("NAME", "PARAMETERS", "RESOLUTIONS", "cases") if not hasattr(mod, a)]
+    if missing:
+        raise StudyError(f"study module {where} lacks {', '.join(missing)} (see docs/study-interface.md)")
+
+
 def load_study(name: str) -> ModuleType:
-    """Import ``studies/<name>.py``; ``name`` may use dashes or underscores.
+    """Import ``studies/<name>.py``; ``name`` may use dashes or underscores. A path to a ``.py`` file
+    (a user's own study with the same interface) is imported from that file (:func:`load_study_file`).
 
     Raises :class:`StudyError` listing the valid names if there is no such study.
     """
+    if str(name).endswith(".py") or "/" in str(name) or "\\" in str(name):
+        return load_study_file(name)
     key = normalise_name(name)
     valid = list_studies()
     if key not in valid:
         raise StudyError(f"unknown study {name!r}; valid studies: {', '.join(valid) or '(none)'}")
     mod = importlib.import_module(f"studies.{key}")
-    missing = [a for a in ("NAME", "PARAMETERS", "RESOLUTIONS", "cases") if not hasattr(mod, a)]
-    if missing:
-        raise StudyError(f"study module studies/{key}.py lacks {', '.join(missing)}")
+    _check_study(mod, f"studies/{key}.py")
     return mod
 
 

@@ -1,0 +1,151 @@
+"""Per-step outputs of a run as small callback objects ("plugins").
+
+A :class:`ngtmc.Simulation` calls every callback as ``f(simulation, row)`` after each accepted
+step (``Simulation.run(callbacks=...)``). The outputs of a run folder are such callbacks, used in
+the same way by a named study (:func:`ngtmc.run_study`) and by a user's own scene
+(``ngtmc.simulate(..., out_dir=...)``):
+
+* :class:`Progress`: the one progress printer (also behind ``Simulation(progress=True)``): step,
+  load (mm), step size (mm), force with its unit, Newton iterations, cut-backs, the share of the
+  load path done and an estimate of the time left from the recent pace;
+* :class:`SnapshotOutput`: fields at the chosen loads (``snapshots.npz`` and ``vtk/``);
+* :class:`CheckpointOutput`: a checkpoint and the run's files every so many steps or seconds;
+* :class:`RowCallbacks`: user functions ``f(simulation, row)``, the row carrying its ``case``.
+
+The history itself is the Simulation's list of rows; the run writes it with its checkpoints.
+"""
+from __future__ import annotations
+
+from collections import deque
+import sys
+import time
+from typing import Callable, Sequence
+
+__all__ = ["Plugin", "Progress", "SnapshotOutput", "CheckpointOutput", "RowCallbacks", "force_unit"]
+
+
+def force_unit(dim: int, thickness: float | None) -> str:
+    """Unit of the reaction force of a scene: ``"N"`` in 3D; in 2D (plane strain) the force is for the
+    scene thickness, ``"N/mm"`` (per mm of thickness) when that thickness is 1 mm, else ``"N"``."""
+    if int(dim) == 2 and (thickness is None or abs(float(thickness) - 1.0) < 1e-12):
+        return "N/mm"
+    return "N"
+
+
+class Plugin:
+    """Base of the per-step outputs: ``step(sim, row)`` after every accepted step."""
+
+    def step(self, sim, row: dict):  # pragma: no cover - overridden
+        pass
+
+    def __call__(self, sim, row: dict):
+        self.step(sim, row)
+
+
+class Progress(Plugin):
+    """Progress line on stderr about every ``interval`` seconds and at the last step.
+
+    ``prefix`` starts each line (e.g. ``"[ngtmc]"`` or ``"[ngtmc three_point_bending] case 1/5
+    main:"``); ``unit`` is the force unit of the run (:func:`force_unit`). The time left is an
+    estimate from the pace (load path per second of wall time) over the last ``window`` seconds,
+    so shrinking steps after a crack starts slow it down instead of being averaged away; it is
+    labelled as an estimate. ``enabled`` may be a callable, which then receives each row instead.
+    """
+
+    def __init__(self, enabled: bool | Callable = True, prefix: str = "[ngtmc]", unit: str = "N",
+                 interval: float = 5.0, window: float = 60.0, case: str | None = None):
+        self.enabled = enabled
+        self.prefix = prefix
+        self.unit = unit
+        self.interval = float(interval)
+        self.window = float(window)
+        self.case = case
+        self.last = -1e9
+        self.pace: deque = deque()     # (elapsed wall time s, pseudo-time of the load path)
+
+    def say(self, text: str):
+        if self.enabled is True:
+            print(f"{self.prefix} {text}", file=sys.stderr, flush=True)
+
+    def time_left(self, elapsed: float, t: float, total: float) -> tuple[float, float] | None:
+        """``(seconds left, seconds of the pace window)`` from the recent pace, or None."""
+        self.pace.append((elapsed, t))
+        while len(self.pace) > 2 and elapsed - self.pace[1][0] >= self.window:
+            self.pace.popleft()
+        e0, t0 = self.pace[0]
+        if elapsed - e0 <= 0 or t - t0 <= 0 or total <= 0 or t >= total:
+            return None
+        return (total - t) * (elapsed - e0) / (t - t0), elapsed - e0
+
+    def line(self, sim, row: dict) -> str:
+        total = sim.schedule.total_time
+        frac = sim.t / total if total > 0 else 1.0
+        el = float(row.get("wall_time", 0.0) or 0.0)
+        left = self.time_left(el, sim.t, total)
+        eta = ""
+        if left is not None and frac < 1.0:
+            eta = f", about {left[0]:.0f} s left (estimate from the pace of the last {left[1]:.0f} s)"
+        alpha = row.get("max_alpha")
+        alpha = f"  max alpha {alpha:.3f}" if alpha is not None and getattr(sim.solver, "alpha", None) is not None else ""
+        return (f"{self.prefix} step {row['step']:5d}  load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  "
+                f"force {row['force']:.5g} {self.unit}{alpha}  Newton {row['newton_iterations']}  "
+                f"cut-backs {row['cutbacks']}  {100 * frac:5.1f} % of the load path  {el:.0f} s{eta}")
+
+    def step(self, sim, row: dict):
+        if not self.enabled:
+            return
+        if callable(self.enabled) and not isinstance(self.enabled, bool):
+            self.enabled(dict(row, case=self.case) if self.case is not None else row)
+            return
+        now = time.perf_counter()
+        if now - self.last < self.interval and not sim.finished:
+            # the pace still needs every step's time
+            self.time_left(float(row.get("wall_time", 0.0) or 0.0), sim.t, sim.schedule.total_time)
+            return
+        self.last = now
+        print(self.line(sim, row), file=sys.stderr, flush=True)
+
+
+class SnapshotOutput(Plugin):
+    """Takes the fields (:class:`ngtmc.snapshots.Snapshots`) at the first accepted step at or past
+    each chosen load, and at the last step."""
+
+    def __init__(self, snaps, prev_load: float):
+        self.snaps = snaps
+        self.prev_load = float(prev_load)
+
+    def step(self, sim, row: dict):
+        self.snaps.maybe_take(self.prev_load, row, final=sim.finished)
+        self.prev_load = float(row["load"])
+
+
+class CheckpointOutput(Plugin):
+    """Keeps the state of the last accepted step, and every ``every`` steps or ``seconds`` seconds
+    calls ``save(state)`` (a checkpoint and the run's files)."""
+
+    def __init__(self, sim, save: Callable[[dict], None], every: int, seconds: float):
+        self.save = save
+        self.every = int(every)
+        self.seconds = float(seconds)
+        self.state = sim.get_state()
+        self.at_step = sim.step
+        self.at_time = time.perf_counter()
+
+    def step(self, sim, row: dict):
+        self.state = sim.get_state()
+        now = time.perf_counter()
+        if sim.step - self.at_step >= self.every or now - self.at_time >= self.seconds:
+            self.save(self.state)
+            self.at_step, self.at_time = sim.step, time.perf_counter()
+
+
+class RowCallbacks(Plugin):
+    """User functions ``f(simulation, row)``; the row carries ``case``."""
+
+    def __init__(self, functions: Sequence[Callable], case: str):
+        self.functions = list(functions)
+        self.case = case
+
+    def step(self, sim, row: dict):
+        for f in self.functions:
+            f(sim, dict(row, case=self.case))

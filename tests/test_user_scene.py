@@ -1,0 +1,173 @@
+"""A user's own scene gets the run folder and report of a named study; one progress printer.
+
+``ngtmc.simulate(scene, schedule, control, out_dir=...)`` and ``ngtmc run path/to/my_study.py``
+go through the runner (:mod:`ngtmc.runner`) and its per-step plugins (:mod:`ngtmc.plugins`):
+the same files, the same metadata schema, the same report. Tiny scenes of tests/scenes.py (a few
+dozen triangles, about a second each).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+import sys
+import textwrap
+
+import numpy as np
+import pandas as pd
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+import ngtmc  # noqa: E402
+from ngtmc.plugins import Progress, force_unit  # noqa: E402
+from ngtmc.runfiles import HISTORY_UNITS, SCHEMA_VERSION  # noqa: E402
+from ngtmc.study import StudyError  # noqa: E402
+from scenes import tension_bar  # noqa: E402
+
+PHYSICS = [c for c in HISTORY_UNITS if c not in ("wall_time", "solve_time", "assembly_time")]
+
+
+def _bar(**kw):
+    kw.setdefault("maxh", 0.1)
+    kw.setdefault("Gc", 1e-3)
+    kw.setdefault("l0", 0.25)
+    return tension_bar(**kw)
+
+
+def _control():
+    return ngtmc.AdaptiveStepControl(du_max=2.5e-4)
+
+
+@pytest.fixture(scope="module")
+def scene_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("user") / "bar"
+    res = ngtmc.simulate(_bar(), 0.002, _control(), out_dir=out, report=True)
+    return out, res
+
+
+def test_simulate_out_dir_writes_a_study_folder(scene_run):
+    out, res = scene_run
+    assert res.run_dir == out
+    for f in ("history.csv", "metadata.json", "snapshots.npz", "report.html", "vtk/main.pvd"):
+        assert (out / f).is_file(), f
+    assert list((out / "checkpoint").glob("main*.npz"))
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["schema_version"] == SCHEMA_VERSION and meta["status"] == "completed"
+    assert meta["parameters_hash"].startswith("sha256:")
+    assert meta["force_unit"] == "N/mm" and meta["thickness_mm"] == 1.0
+    assert meta["parameters"]["bar.E"] == {"value": 1000.0, "unit": "MPa",
+                                           "description": "Young's modulus in region 'bar'"}
+    assert meta["results"]["main"]["status"] == "completed"
+    hist = pd.read_csv(out / "history.csv")
+    assert list(hist.columns[:len(HISTORY_UNITS) + 1]) == ["case", *HISTORY_UNITS]
+    # the same history as the in-memory run, and the result of simulate carries it with the solver
+    mem = ngtmc.simulate(_bar(), 0.002, _control())
+    np.testing.assert_allclose(hist[PHYSICS].to_numpy(float), mem.history[PHYSICS].to_numpy(float),
+                               rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(res.history[PHYSICS].to_numpy(float), mem.history[PHYSICS].to_numpy(float),
+                               rtol=1e-9, atol=1e-14)
+    assert res.solver is not None and res.peak_force == pytest.approx(mem.peak_force)
+
+
+def test_simulate_out_dir_resume_and_refusals(scene_run, tmp_path):
+    out, _ = scene_run
+    # the same scene: every case is complete, nothing is recomputed
+    again = ngtmc.simulate(_bar(), 0.002, _control(), out_dir=out, resume=True, report=False)
+    assert len(again.history) == len(pd.read_csv(out / "history.csv"))
+    # another scene in the same folder: refused, the differences named
+    with pytest.raises(StudyError, match=r"bar\.E: 1000\.0 -> 2000\.0"):
+        ngtmc.simulate(_bar(E=2000.0), 0.002, _control(), out_dir=out, resume=True, report=False)
+    with pytest.raises(StudyError, match="holds a run already"):
+        ngtmc.simulate(_bar(), 0.002, _control(), out_dir=out, report=False)
+
+
+def test_user_scene_report_renders_in_chromium(scene_run, tmp_path):
+    from test_report_browser import _check_page, _chromium
+    exe = _chromium()
+    if exe is None:
+        pytest.skip("no chromium binary (install the Debian package 'chromium')")
+    out, _ = scene_run
+    _check_page(exe, out / "report.html", tmp_path, min_plots=4)
+
+
+STUDY_FILE = '''
+"""A study of my own: a bar pulled in tension."""
+import sys
+sys.path.insert(0, {tests!r})
+import ngtmc
+from ngtmc.study import Case
+from scenes import tension_bar
+
+NAME = "my_bar"
+TITLE = "My bar in tension"
+SUMMARY = "a user's study file"
+PARAMETERS = {{"E": (1000.0, "MPa", "Young's modulus"), "final_load": (0.002, "mm", "final load")}}
+RESOLUTIONS = {{"quick": {{"maxh": 0.1}}, "medium": {{"maxh": 0.05}}, "paper": {{"maxh": 0.025}}}}
+
+
+def cases(p):
+    return [Case("main", "bar", scene=lambda: tension_bar(E=p["E"], Gc=1e-3, l0=0.25, maxh=p["maxh"]),
+                 schedule=p["final_load"], control=ngtmc.AdaptiveStepControl(du_max=5e-4),
+                 snapshot_loads=[0.001])]
+'''
+
+
+def test_cli_runs_a_study_file(tmp_path, capsys):
+    from ngtmc.cli import main
+    f = tmp_path / "my_study.py"
+    f.write_text(STUDY_FILE.format(tests=str(Path(__file__).parent)))
+    out = tmp_path / "run"
+    assert main(["run", str(f), "-o", str(out), "--set", "E=2000", "--threads", "1", "-q", "--no-vtk"]) == 0
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["study"] == "my_bar" and meta["overrides"] == {"E": 2000.0}
+    assert meta["parameters"]["E"]["value"] == 2000.0 and (out / "report.html").is_file()
+    assert main(["run", str(tmp_path / "missing.py"), "-o", str(tmp_path / "x")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------- progress
+def test_force_unit():
+    assert force_unit(2, 1.0) == "N/mm"
+    assert force_unit(2, 2.0) == "N"
+    assert force_unit(3, None) == "N"
+
+
+def test_progress_lines_carry_the_unit_and_agree(tmp_path, capsys):
+    ngtmc.simulate(_bar(), 0.001, _control(), progress=True)
+    api = [ln for ln in capsys.readouterr().err.splitlines() if "step" in ln and "load" in ln]
+    ngtmc.simulate(_bar(), 0.001, _control(), out_dir=tmp_path / "r", progress=True, report=False, vtk=False)
+    run = [ln for ln in capsys.readouterr().err.splitlines() if " step " in ln and "load" in ln]
+    assert api and run
+    for ln in api + run:
+        assert " N/mm " in ln, ln
+    # one printer: the same words after the prefix
+    strip = lambda ln: ln.split(" step ", 1)[1].split(" % of the load path")[0]  # noqa: E731
+    assert [strip(a)[:30] for a in api[-1:]] == [strip(r)[:30] for r in run[-1:]]
+    ngtmc.simulate(_bar(thickness=2.0), 0.001, _control(), progress=True)
+    thick = [ln for ln in capsys.readouterr().err.splitlines() if "step" in ln and "load" in ln]
+    assert thick and all(" N " in ln and "N/mm" not in ln for ln in thick)
+
+
+class _FakeSim:
+    def __init__(self, total):
+        self.schedule = type("S", (), {"total_time": total})()
+        self.t = 0.0
+        self.finished = False
+        self.solver = type("V", (), {"alpha": None})()
+
+
+def test_time_left_follows_the_recent_pace():
+    """Steps shrink after the peak: the estimate follows the recent pace, not the load fraction."""
+    p = Progress(True, unit="N/mm", window=20.0)
+    # 0.5 of the load path in 10 s, then the pace drops to 0.01 per 10 s
+    for el, t in [(0.0, 0.0), (5.0, 0.25), (10.0, 0.5)]:
+        p.time_left(el, t, 1.0)
+    for k in range(1, 8):
+        left = p.time_left(10.0 + 10 * k, 0.5 + 0.01 * k, 1.0)
+    # load fraction alone would say about 1.5 x 80 s = 120 s; the recent pace says about 430 s
+    assert left[0] > 300
+    assert left[1] <= 30
+    sim = _FakeSim(1.0)
+    sim.t = 0.57
+    line = p.line(sim, {"step": 9, "load": 0.57, "step_size": 0.01, "force": 1.5, "newton_iterations": 3,
+                        "cutbacks": 0, "wall_time": 90.0})
+    assert "force 1.5 N/mm" in line and "estimate from the pace of the last" in line
