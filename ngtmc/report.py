@@ -444,6 +444,76 @@ def _case_rows(history: pd.DataFrame, case: str) -> pd.DataFrame:
 
 
 # --------------------------------------------------------------------------------------------
+# what the run has: the sections and captions follow it
+# --------------------------------------------------------------------------------------------
+def _any_positive(history: pd.DataFrame, col: str) -> bool:
+    if col not in history or not len(history):
+        return False
+    v = pd.to_numeric(history[col], errors="coerce").to_numpy(dtype=float)
+    return bool(np.any(np.nan_to_num(v) > 0))
+
+
+def run_features(meta: dict, history: pd.DataFrame, snapshots: dict | None = None) -> dict:
+    """What a run has, for the sections and captions of its report: ``fracture`` (a phase field),
+    ``void`` (a third medium, so a gap closes before contact), ``regulariser``, ``several_cases``,
+    ``references``. Taken from ``metadata["features"]`` (recorded by the runner from the scenes)
+    where present, else inferred from the recorded files: phase-field dofs in the mesh record (or
+    a nonzero W_f or max alpha in the history), void triangles (rho < 1) in the snapshots or a
+    gamma0 parameter, a nonzero regularisation energy."""
+    rec = meta.get("features") if isinstance(meta.get("features"), dict) else {}
+    mesh = meta.get("mesh") or {}
+    fracture = rec.get("fracture")
+    if fracture is None:
+        if "ndof_alpha" in mesh and _finite(mesh.get("ndof_alpha")):
+            fracture = float(mesh["ndof_alpha"]) > 0
+        else:
+            fracture = _any_positive(history, "max_alpha") or _any_positive(history, "fracture_energy")
+    void = rec.get("void")
+    if void is None:
+        rhos = [np.asarray(sn.get("rho")) for sn in (snapshots or {}).values()
+                if isinstance(sn, dict) and sn.get("rho") is not None]
+        if rhos:
+            void = any(r.size and bool(np.any(r < 1.0)) for r in rhos)
+        else:
+            void = _param_value(meta.get("parameters") or {}, "gamma0") is not None or any(
+                _param_value(c.get("parameters") or {}, "gamma0") is not None for c in _case_list(meta))
+    regulariser = rec.get("regulariser")
+    if regulariser is None:
+        regulariser = _any_positive(history, "regularisation_energy")
+    refs = [r for r in meta.get("references") or [] if isinstance(r, dict)]
+    return {"fracture": bool(fracture), "void": bool(void), "regulariser": bool(regulariser),
+            "several_cases": len(_case_list(meta)) > 1, "references": bool(refs)}
+
+
+def overrides_text(meta: dict) -> str:
+    """``"E = 2000 MPa, k_u = 50 1/N"`` from ``metadata["overrides"]`` (units from the parameter
+    table), or ``""`` when the run has none."""
+    over = meta.get("overrides") if isinstance(meta.get("overrides"), dict) else {}
+    params = meta.get("parameters") or {}
+    parts = []
+    for k, v in over.items():
+        unit = (params.get(k) or {}).get("unit") if isinstance(params.get(k), dict) else None
+        if isinstance(v, (list, tuple)):
+            vs = ", ".join(fmt(x) for x in v)
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            vs = fmt(v, 6)
+        else:
+            vs = str(v)
+        parts.append(f"{k} = {vs}" + (f" {unit}" if unit and unit != "-" else ""))
+    return ", ".join(parts)
+
+
+def physics_key(meta: dict) -> str:
+    """Runs with equal keys share their physics and may be compared (they differ at most in mesh
+    and step sizes): ``metadata["physics_hash"]`` (hash of the study's physical parameters,
+    without the resolution keys) where recorded, else the recorded overrides."""
+    if meta.get("physics_hash"):
+        return str(meta["physics_hash"])
+    over = meta.get("overrides") if isinstance(meta.get("overrides"), dict) else {}
+    return "overrides:" + json.dumps(over, sort_keys=True, default=str)
+
+
+# --------------------------------------------------------------------------------------------
 # numbers
 # --------------------------------------------------------------------------------------------
 def case_numbers(meta: dict, history: pd.DataFrame, case: str) -> dict:
@@ -712,11 +782,16 @@ def _fig_newton(history, cases, styles):
     return {"data": data, "layout": lay}
 
 
-def _fig_energies(history, cases, styles):
+def _fig_energies(history, cases, styles, features: dict | None = None):
+    """Elastic energy, and the regularisation energy and W_f where the run has them (``features``
+    of :func:`run_features`; None: all three)."""
     data = []
     spec = [("elastic_energy", "elastic", "solid"),
             ("regularisation_energy", "regularisation", "dot"),
             ("fracture_energy", "fracture W_f", "dash")]
+    if features is not None:
+        spec = [sp for sp in spec if (sp[0] != "regularisation_energy" or features.get("regulariser"))
+                and (sp[0] != "fracture_energy" or features.get("fracture"))]
     for c in cases:
         h = _case_rows(history, c["name"])
         if not len(h):
@@ -1130,22 +1205,25 @@ def render_report(run_dir, output=None) -> Path:
     fu = meta.get("force_unit") or "N"
     study = str(meta.get("study", ""))
     has_hist = bool(len(history)) and history["load"].notna().any()
+    features = run_features(meta, history, snapshots)
 
     figs: dict[str, dict] = {}
     figs["fig-force"] = _fig_force(meta, history, cases, styles)
     if study == "contact_gamma0":
         figs["fig-force-log"] = _fig_force(meta, history, cases, styles, log_y=True)
     figs["fig-step-size"] = _fig_step_size(history, cases, styles)
-    figs["fig-wf-alpha"] = _fig_wf_alpha(history, cases, styles)
+    if features["fracture"]:
+        figs["fig-wf-alpha"] = _fig_wf_alpha(history, cases, styles)
     figs["fig-newton"] = _fig_newton(history, cases, styles)
-    figs["fig-energies"] = _fig_energies(history, cases, styles)
+    figs["fig-energies"] = _fig_energies(history, cases, styles, features)
 
     interp = None
     if study == "contact_gamma0":
         f1, f2, info = _fig_interpolation(meta, cases)
         figs["fig-gamma"] = f1
-        figs["fig-gc"] = f2
-        interp = info
+        if features["fracture"]:       # Gc(rho) matters only where something may break
+            figs["fig-gc"] = f2
+        interp = dict(info, gc=features["fracture"])
 
     speed = _run_speed_entries(meta, history, cases) if len(cases) >= 2 else []
     speed_meaningful = len(speed) >= 2 and study != "contact_gamma0"
@@ -1230,6 +1308,9 @@ def render_report(run_dir, output=None) -> Path:
         "n_elements": fmt(mesh.get("n_elements")),
         "ndof": fmt((mesh.get("ndof_u") or 0) + (mesh.get("ndof_alpha") or 0))
         if ("ndof_u" in mesh or "ndof_alpha" in mesh) else "–",
+        "ndof_parts": "u + α" if (mesh.get("ndof_alpha") or 0) > 0 else (
+            "u" if "ndof_u" in mesh or "ndof_alpha" in mesh else ""),
+        "features": features, "overrides": overrides_text(meta),
         "wall_time": fmt_duration(meta.get("wall_time_s")),
         "thickness": fmt_u(meta.get("thickness_mm"), "mm"), "force_unit": fu,
         "cases": cases, "styles": styles, "has_history": has_hist,
@@ -1273,9 +1354,11 @@ def _find_runs(reports_dir: Path) -> list[Path]:
 def render_index(reports_dir) -> Path:
     """Write ``reports_dir/index.html`` linking every run folder holding a metadata.json.
 
-    Runs are grouped by study; for a study with several runs the page compares wall time (s)
-    against the relative error in peak force (%), relative to the finest run of the study (the
-    one with most mesh elements) and to the published value (the ``peak_force`` target).
+    Runs are grouped by study, each with its overrides; runs of the same physics (equal
+    :func:`physics_key`: the same physical parameters, differing only in mesh and step sizes) are
+    compared by wall time (s) against the relative error in peak force (%), relative to the finest
+    run of that group (the one with most mesh elements) and to the published value (the
+    ``peak_force`` target). Runs with other physics are never compared with each other.
     Returns the path of the written page.
     """
     reports_dir = Path(reports_dir)
@@ -1312,28 +1395,39 @@ def render_index(reports_dir) -> Path:
             "peak_force": nums.get("peak_force"), "peak": fmt_u(nums.get("peak_force"), fu),
             "peak_load": fmt_u(nums.get("peak_load"), "mm"), "case_label": cases[0]["label"] if cases else first,
             "published": _published_peak(meta, first, fu), "force_unit": fu,
-            "n_cases": len(cases), "steps": nums.get("steps")})
+            "n_cases": len(cases), "steps": nums.get("steps"),
+            "overrides": overrides_text(meta), "physics": physics_key(meta)})
     figs = {}
     studies = []
     for study in sorted(groups):
         runs = sorted(groups[study], key=lambda r: r.get("created_raw", ""), reverse=True)
-        comp = None
+        comps = []
         valid = [r for r in runs if "error" not in r and _finite(r.get("peak_force"))
                  and r.get("status") == "completed"]
-        units = {r["force_unit"] for r in valid}
-        if len(valid) >= 2 and len(units) == 1:
+        # only runs with the same physics are compared (same physical parameters, or the same
+        # overrides for runs that do not record them): they differ in mesh and step sizes only
+        by_physics: dict[str, list[dict]] = {}
+        for r in valid:
+            by_physics.setdefault(r["physics"], []).append(r)
+        for group in by_physics.values():
+            units = {r["force_unit"] for r in group}
+            if len(group) < 2 or len(units) != 1:
+                continue
             entries = [{"label": f"{r['resolution']} ({r['elements']} el.)",
                         "wall_time_s": r["wall_time_s"], "peak_force": r["peak_force"],
                         "size": (r.get("n_elements") or 0, r.get("steps") or 0),
                         "published": r["published"],
                         "name": r["name"], "size_text": f"{r['elements']} elements",
-                        "peak": r["peak"], "wall": r["wall"]} for r in valid]
+                        "peak": r["peak"], "wall": r["wall"]} for r in group]
             speed_error_rows(entries)
-            fid = f"fig-speed-{len(studies)}"
-            figs[fid] = _fig_speed_error(entries, f"{study}: wall time against error in peak force",
+            fid = f"fig-speed-{len(figs)}"
+            physics = group[0]["overrides"] or "the study's own parameters"
+            figs[fid] = _fig_speed_error(entries, f"{study} ({physics}): wall time against error in peak force",
                                          "elements")
-            comp = {"fig_id": fid, "rows": entries}
-        studies.append({"study": study, "runs": runs, "comp": comp,
+            comps.append({"fig_id": fid, "rows": entries, "physics": physics,
+                          "force_unit": group[0]["force_unit"]})
+        comp = comps[0] if comps else None
+        studies.append({"study": study, "runs": runs, "comp": comp, "comps": comps,
                         "anchor": "study-" + "".join(ch if ch.isalnum() else "-" for ch in study)})
     ctx = {"studies": studies, "fig_json": _script_json(_clean(figs)), "fig_ids": list(figs),
            "plotly_js": _plotly_js() if figs else "",

@@ -196,6 +196,10 @@ class _Run:
         self.force_unit: str | None = None      # of the first scene built (ngtmc.plugins.force_unit)
         self.thickness: float | None = None
         self.simulations: dict = {}             # case -> the Simulation that computed it in this process
+        self.features: dict = {}                # what the scenes have (fracture, void, regulariser), for the report
+        #: hash of the physical parameters alone (PARAMETERS, not the resolution's mesh and step sizes):
+        #: runs with equal physics_hash differ only in resolution (the index compares only those)
+        self.physics_hash = parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p})
         self.rows: dict[str, list[dict]] = {}
         self.snaps: dict[str, dict] = {}      # case -> arrays for snapshots.npz
         self.results: dict[str, dict] = {}
@@ -266,6 +270,7 @@ class _Run:
             "parameters": _parameter_table(mod, p),
             "overrides": self.overrides,
             "parameters_hash": self.hash,
+            "physics_hash": self.physics_hash,
             "mesh": {k: v for k, v in (self.mesh or {}).items() if k != "dim"},
             "wall_time_s": self.wall_time(),
             "cases": [dict(name=c.name, label=c.label, parameters=c.parameters, **self.case_meta.get(c.name, {}))
@@ -279,6 +284,8 @@ class _Run:
                      "threads": _threads()},
             "process": process_info(),
         }
+        if self.features:
+            meta["features"] = dict(self.features)
         if self.error:
             meta["error"] = self.error
         return meta
@@ -471,6 +478,9 @@ class _Run:
         if self.force_unit is None:
             self.force_unit = sim.force_unit
             self.thickness = scene.thickness
+        for key, has in (("fracture", scene.has_fracture), ("void", scene.has_void),
+                         ("regulariser", scene.regulariser is not None)):
+            self.features[key] = bool(self.features.get(key, False) or has)
         if case.control is not None:
             cm["control"] = {a: getattr(case.control, a) for a in _CONTROL_SETTINGS if hasattr(case.control, a)}
         cm["schedule"] = [float(x) for x in sim.schedule.points]
@@ -544,6 +554,8 @@ class _Run:
         """Compute every case not taken over by :meth:`prepare_resume`; ``meta``: the recorded
         metadata of the run to resume (its creation date and wall time carry over)."""
         if resume and meta:
+            if isinstance(meta.get("features"), dict):
+                self.features.update({k: bool(v) for k, v in meta["features"].items()})
             try:
                 self.wall_before = float(meta.get("wall_time_s") or 0.0)
                 self.created = meta.get("created", self.created)

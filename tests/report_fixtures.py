@@ -111,14 +111,21 @@ def write_run(path, study: str = "three_point_bending", cases=None, status: str 
               with_targets: bool = True, with_results: bool = True, drop_columns=(),
               n_elements: int | None = None, wall_time_s: float | None = None,
               force_scale: float = 1.0, resolution: str = "quick",
-              mesh_n: tuple[int, int] = (16, 5)) -> Path:
+              mesh_n: tuple[int, int] = (16, 5), fracture: bool | None = None,
+              overrides: dict | None = None, physics_hash: str | None = None) -> Path:
     """Write a synthetic run directory and return its path.
 
     ``cases``: list of (name, label, du_max_mm, case_parameters). Default: two step settings
     ("coarse" with du_max = 2e-3 mm and "fine" with 1e-3 mm) so that the speed-against-error
     section has data. For ``study == "contact_gamma0"`` the default is three gamma0 values plus
     a classical-contact case.
+
+    ``fracture``: whether the scene has a phase field (default: True except for contact_gamma0,
+    whose beams cannot break); without it W_f, max alpha and the alpha snapshots are zero and the
+    mesh has no phase-field dofs. ``overrides`` and ``physics_hash`` go into the metadata.
     """
+    if fracture is None:
+        fracture = study != "contact_gamma0"
     path = Path(path)
     path.mkdir(parents=True, exist_ok=True)
     if cases is None:
@@ -136,6 +143,10 @@ def write_run(path, study: str = "three_point_bending", cases=None, status: str 
     for k, (name, label, du, cpar) in enumerate(cases):
         fs = force_scale * (1.0 + 0.02 * k)
         h = case_history(name, du, t0=t0, force_scale=fs, drop_columns=drop_columns)
+        if not fracture:
+            for col in ("fracture_energy", "max_alpha"):
+                if col in h:
+                    h[col] = 0.0
         if study == "contact_gamma0" and "gamma0" in cpar:
             pre = h["load"] < GAP
             h.loc[pre, "force"] = h.loc[pre, "force"] * cpar["gamma0"] / 1e-5
@@ -155,7 +166,7 @@ def write_run(path, study: str = "three_point_bending", cases=None, status: str 
         npz[f"{name}__rho"] = rho
         npz[f"{name}__loads"] = snap_loads
         npz[f"{name}__u"] = u
-        npz[f"{name}__alpha"] = alpha
+        npz[f"{name}__alpha"] = alpha if fracture else np.zeros_like(alpha)
     history = pd.concat(frames, ignore_index=True)
     history.to_csv(path / "history.csv", index=False)
     if with_snapshots:
@@ -188,10 +199,14 @@ def write_run(path, study: str = "three_point_bending", cases=None, status: str 
         },
         "mesh": {"n_elements": int(n_elements if n_elements is not None else len(triangles)),
                  "n_vertices": int(len(vertices)), "ndof_u": 2 * len(vertices) * 4,
-                 "ndof_alpha": int(len(vertices)), "h_min": 0.0075, "h_max": 0.5},
+                 "ndof_alpha": int(len(vertices)) if fracture else 0, "h_min": 0.0075, "h_max": 0.5},
         "wall_time_s": float(wall_time_s if wall_time_s is not None else t0),
         "cases": [{"name": n, "label": lab, "parameters": p} for n, lab, _, p in cases],
     }
+    if overrides is not None:
+        meta["overrides"] = dict(overrides)
+    if physics_hash is not None:
+        meta["physics_hash"] = physics_hash
     if with_references:
         meta["references"] = [
             {"label": "Ambati et al. 2015, Fig. 22 (shifted by the gap)", "source": "synthetic",

@@ -126,7 +126,8 @@ def test_speed_error_within_run(tpb_run):
 
 
 def test_contact_gamma0_has_interpolation(tmp_path):
-    run = write_run(tmp_path / "cg", study="contact_gamma0")
+    # with a phase field (the real study has none: see test_no_fracture_report_has_no_fracture_parts)
+    run = write_run(tmp_path / "cg", study="contact_gamma0", fracture=True)
     page = report.render_report(run).read_text(encoding="utf-8")
     ids = _ids(page)
     for sid in SECTIONS + ["interpolation"]:
@@ -144,7 +145,7 @@ def test_contact_gamma0_has_interpolation(tmp_path):
 
 
 def test_interpolation_parameters_from_metadata(tmp_path):
-    run = write_run(tmp_path / "cg", study="contact_gamma0", cases=[("main", "main", 2e-3, {})])
+    run = write_run(tmp_path / "cg", study="contact_gamma0", cases=[("main", "main", 2e-3, {})], fracture=True)
     meta = json.loads((run / "metadata.json").read_text())
     meta["parameters"]["gc_a"] = {"value": 4.0, "unit": "-", "description": "a"}
     meta["parameters"]["gc_b"] = {"value": 50.0, "unit": "-", "description": "b"}
