@@ -860,6 +860,8 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
     sim = run.simulations.get("main")
     rows = run.rows.get("main") or []
     history = pd.DataFrame(rows).reindex(columns=list(HISTORY_UNITS))
-    return SimulationResult(history, dict(HISTORY_UNITS), sim.solver if sim is not None else None,
+    units = sim.units if sim is not None else dict(HISTORY_UNITS, force=run.force_unit or
+                                                   (read_metadata(run.out) or {}).get("force_unit", "N"))
+    return SimulationResult(history, units, sim.solver if sim is not None else None,
                             float(run.results.get("main", {}).get("wall_time_s") or run.wall_time()),
                             run_dir=run.out)

@@ -68,7 +68,7 @@ class SimulationResult:
 
     @property
     def peak_force(self) -> float:
-        """Largest recorded force, N."""
+        """Largest recorded force, in ``units["force"]`` (N, or N/mm in 2D with thickness 1 mm)."""
         return float(self.history["force"].max())
 
     @property
@@ -430,7 +430,9 @@ class Simulation:
 
     @property
     def units(self) -> dict:
-        return dict(HISTORY_UNITS)
+        """Units of the history columns, the force in this scene's unit (:attr:`force_unit`:
+        ``"N/mm"`` in 2D with thickness 1 mm, else ``"N"``), as in a run folder's metadata."""
+        return dict(HISTORY_UNITS, force=self.force_unit)
 
     # ------------------------------------------------------------------ checkpoints
     def get_state(self) -> dict:

@@ -171,3 +171,10 @@ def test_time_left_follows_the_recent_pace():
     line = p.line(sim, {"step": 9, "load": 0.57, "step_size": 0.01, "force": 1.5, "newton_iterations": 3,
                         "cutbacks": 0, "wall_time": 90.0})
     assert "force 1.5 N/mm" in line and "estimate from the pace of the last" in line
+
+
+def test_result_units_carry_the_force_unit(scene_run):
+    out, res = scene_run
+    meta = json.loads((out / "metadata.json").read_text())
+    assert res.units["force"] == meta["force_unit"] == "N/mm"
+    assert ngtmc.Simulation(_bar(thickness=2.0), 0.001).units["force"] == "N"
