@@ -1,0 +1,529 @@
+"""Plotly figures of the reports (plain dicts, serialised once with json) and the compact mesh
+payloads of the snapshots, drawn in the browser as filled SVG polygons."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .loading import _case_rows, _param_value
+from .numbers import _finite, _rs, fmt, gamma_of_rho, gc_ratio_of_rho, unit_factor
+
+
+#: Largest number of phase-field frames shown per case (frames are skipped evenly beyond this).
+MAX_FRAMES = 8
+
+
+#: Budget of vertex positions in all snapshot frames of a page (frames are skipped beyond it).
+MAX_VERTEX_FRAMES = 150_000
+
+
+#: Element edges are drawn in the density/mesh plot up to this many triangles.
+MAX_EDGE_TRIANGLES = 30_000
+
+
+#: Largest number of points drawn per history curve (longer curves are thinned, shape kept).
+MAX_POINTS = 400
+
+
+#: Number of colour levels used to draw per-triangle fields.
+N_LEVELS = 16
+
+
+CASE_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
+               "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"]
+
+
+REF_COLORS = ["#000000", "#555555", "#8c6d31", "#393b79", "#637939"]
+
+
+ALPHA_COLORSCALE = [[0.0, "#e4ecf6"], [0.12, "#b9d3ea"], [0.3, "#fee391"], [0.5, "#fdae61"],
+                    [0.75, "#e6492d"], [1.0, "#7f0000"]]
+
+
+RHO_COLORSCALE = [[0.0, "#f7fbff"], [1.0, "#2b5b8a"]]
+
+
+FONT = ("system-ui, -apple-system, 'Segoe UI', Roboto, 'Helvetica Neue', Arial, "
+        "'Liberation Sans', sans-serif")
+
+
+def _case_style(cases: list[dict]) -> dict[str, dict]:
+    styles = {}
+    k = 0
+    for c in cases:
+        if "classical" in c["name"].lower() or "classical" in c["label"].lower():
+            styles[c["name"]] = {"color": "#000000", "dash": "dot"}
+        else:
+            styles[c["name"]] = {"color": CASE_COLORS[k % len(CASE_COLORS)], "dash": "solid"}
+            k += 1
+    return styles
+
+
+def _axis(title: str, **kw) -> dict:
+    ax = {"title": {"text": title}, "showgrid": True, "gridcolor": "#e6e6e6",
+          "exponentformat": "power",
+          "zeroline": False, "showline": True, "linecolor": "#444", "mirror": True,
+          "ticks": "outside", "automargin": True}
+    ax.update(kw)
+    return ax
+
+
+def _layout(title: str, xtitle: str, ytitle: str, height: int = 430, **kw) -> dict:
+    lay = {
+        "title": {"text": title, "x": 0.01, "xanchor": "left", "font": {"size": 15}},
+        "font": {"family": FONT, "size": 12, "color": "#222"},
+        "paper_bgcolor": "#ffffff", "plot_bgcolor": "#ffffff",
+        "xaxis": _axis(xtitle), "yaxis": _axis(ytitle),
+        "height": height, "margin": {"l": 70, "r": 30, "t": 50, "b": 60},
+        "legend": {"bgcolor": "rgba(255,255,255,0.85)", "bordercolor": "#ccc", "borderwidth": 1},
+        "hovermode": "closest",
+    }
+    lay.update(kw)
+    return lay
+
+
+def decimate(x, y, max_points: int = MAX_POINTS, log_y: bool = False) -> np.ndarray:
+    """Indices of at most about ``max_points`` points keeping the shape of the curve (x, y).
+
+    Points are kept evenly in arc length of the curve normalised by its x and y ranges (log10 of
+    y when ``log_y``), so steep drops and spikes survive while long smooth stretches are thinned;
+    the first, last, largest and smallest points are always kept.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    n = len(x)
+    if n <= max_points:
+        return np.arange(n)
+    yy = np.log10(np.where(y > 0, y, np.nan)) if log_y else y.copy()
+    ok = np.isfinite(x) & np.isfinite(yy)
+    if not ok.any():
+        return np.unique(np.linspace(0, n - 1, max_points).astype(int))
+    xs = np.where(ok, x, np.nan)
+    rx = np.nanmax(xs) - np.nanmin(xs) or 1.0
+    ry = np.nanmax(np.where(ok, yy, np.nan)) - np.nanmin(np.where(ok, yy, np.nan)) or 1.0
+    xn = np.nan_to_num((x - np.nanmin(xs)) / rx)
+    yn = np.nan_to_num((yy - np.nanmin(np.where(ok, yy, np.nan))) / ry)
+    ds = np.hypot(np.diff(xn), np.diff(yn)) + 1.0 / (4 * max_points)  # small floor: index spread
+    s = np.r_[0.0, np.cumsum(ds)]
+    cells = np.floor(s / s[-1] * (max_points - 4)).astype(int)
+    keep = np.r_[True, cells[1:] != cells[:-1]]
+    keep[-1] = True
+    for i in (np.nanargmax(np.where(ok, y, np.nan)), np.nanargmin(np.where(ok, y, np.nan))):
+        keep[int(i)] = True
+    return np.flatnonzero(keep)
+
+
+def _legend_rows(names: list, width_chars: int = 64) -> int:
+    """Rough number of rows a horizontal legend needs for these entry names."""
+    rows, used = 1, 0
+    for n in names:
+        w = len(str(n or "")) + 7
+        if used and used + w > width_chars:
+            rows, used = rows + 1, 0
+        used += w
+    return rows
+
+
+def _legend_below(lay: dict, rows: int = 2) -> dict:
+    """Put the legend under the plot (for half-width plots and plots with a right y axis)."""
+    lay["legend"].update({"orientation": "h", "x": 0.0, "xanchor": "left", "y": -0.2,
+                          "yanchor": "top", "font": {"size": 11}})
+    lay["margin"]["b"] = 80 + 20 * rows
+    lay["height"] = lay.get("height", 430) + 20 * rows
+    return lay
+
+
+def _log_axis(ax: dict, values) -> dict:
+    """Log axis with ticks at whole decades when the data span two decades or more."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v) & (v > 0)]
+    ax.update({"type": "log", "exponentformat": "power"})
+    if v.size and v.max() / v.min() >= 100:
+        decades = math.log10(v.max() / v.min())
+        ax["dtick"] = 1 if decades <= 8 else int(math.ceil(decades / 8))
+    return ax
+
+
+def _line(x, y, name, color, dash="solid", width=2.0, mode="lines", yaxis=None,
+          legendgroup=None, showlegend=True, sig=5, log_y=False, max_points=None,
+          units: tuple[str, str] | None = None, **kw) -> dict:
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    idx = decimate(x, y, max_points or MAX_POINTS, log_y=log_y)
+    x, y = x[idx], y[idx]
+    tr = {"type": "scatter", "mode": mode, "x": _rs(x, sig), "y": _rs(y, sig), "name": name,
+          "line": {"color": color, "dash": dash, "width": width}, "showlegend": showlegend}
+    if "markers" in mode:
+        tr["marker"] = {"color": color, "size": 6}
+    if units:
+        ux, uy = (f" {u}" if u and u not in ("-", "1") else "" for u in units)
+        tr["hovertemplate"] = f"%{{x:.5g}}{ux}, %{{y:.5g}}{uy}<extra>%{{fullData.name}}</extra>"
+    if yaxis:
+        tr["yaxis"] = yaxis
+    if legendgroup:
+        tr["legendgroup"] = legendgroup
+    tr.update(kw)
+    return tr
+
+
+def _log_toggle(axis: str = "yaxis", initial: str = "linear") -> list:
+    return [{"type": "buttons", "direction": "left", "x": 1.0, "xanchor": "right", "y": 1.13,
+             "yanchor": "top", "showactive": True, "active": 0 if initial == "linear" else 1,
+             "bgcolor": "#f4f4f4", "bordercolor": "#bbb", "font": {"size": 11},
+             "buttons": [{"label": "linear y", "method": "relayout", "args": [{f"{axis}.type": "linear"}]},
+                         {"label": "log y", "method": "relayout", "args": [{f"{axis}.type": "log"}]}]}]
+
+
+def _fig_force(meta, history, cases, styles, log_y=False):
+    fu = meta.get("force_unit") or "N"
+    data = []
+    for k, ref in enumerate(r for r in meta.get("references") or [] if isinstance(r, dict)):
+        fac = unit_factor(ref.get("y_unit"), fu)
+        fac = 1.0 if fac is None else fac
+        color = REF_COLORS[k % len(REF_COLORS)]
+        label = str(ref.get("label", "reference"))
+        x = np.asarray(ref.get("x") or [], dtype=float)
+        if ref.get("kind") == "band":
+            lo = np.asarray(ref.get("y_lower") or [], dtype=float) * fac
+            hi = np.asarray(ref.get("y_upper") or [], dtype=float) * fac
+            n = min(len(x), len(lo), len(hi))
+            if n == 0:
+                continue
+            if log_y:
+                lo, hi = np.abs(lo), np.abs(hi)
+                lo[lo <= 0] = np.nan
+                hi[hi <= 0] = np.nan
+            data.append(_line(x[:n], hi[:n], label, "rgba(120,120,120,0.6)", width=0.8, units=("mm", fu),
+                              legendgroup=f"ref{k}", showlegend=False, hoverinfo="skip"))
+            data.append(_line(x[:n], lo[:n], label, "rgba(120,120,120,0.6)", width=0.8, units=("mm", fu),
+                              legendgroup=f"ref{k}", fill="tonexty",
+                              fillcolor="rgba(150,150,150,0.30)"))
+        else:
+            y = np.asarray(ref.get("y") or [], dtype=float) * fac
+            n = min(len(x), len(y))
+            if n == 0:
+                continue
+            if log_y:
+                y = np.abs(y)
+                y[y <= 0] = np.nan
+            data.append(_line(x[:n], y[:n], label, color, dash="dash", width=2, units=("mm", fu),
+                              legendgroup=f"ref{k}"))
+    for c in cases:
+        h = _case_rows(history, c["name"])
+        if log_y and len(h):
+            h = h[h["load"] > 0]  # the initial state carries round-off only
+        if not len(h):
+            continue
+        y = h["force"].to_numpy(dtype=float)
+        if log_y:
+            y = np.abs(y)
+            y[y <= 0] = np.nan
+        st = styles[c["name"]]
+        data.append(_line(h["load"], y, c["label"], st["color"], dash=st["dash"], width=2.2,
+                          units=("mm", fu),
+                          mode="lines+markers" if len(h) < 40 else "lines"))
+    if log_y:
+        lay = _layout("|Force| against applied displacement (log scale)",
+                      "applied displacement u (mm)", f"|force| |F| ({fu})")
+        ys = [v for t in data for v in t["y"] if v is not None]
+        _log_axis(lay["yaxis"], ys)
+    else:
+        lay = _layout("Force against applied displacement", "applied displacement u (mm)",
+                      f"force F ({fu})")
+    return {"data": data, "layout": lay}
+
+
+def _fig_step_size(history, cases, styles):
+    data = []
+    for c in cases:
+        h = _case_rows(history, c["name"])
+        h = h[h["step"].fillna(1) > 0] if len(h) else h
+        if not len(h) or not h["step_size"].notna().any():
+            continue
+        st = styles[c["name"]]
+        data.append(_line(h["load"], h["step_size"].abs(), c["label"], st["color"], dash=st["dash"],
+                          mode="lines+markers", width=1.2, log_y=True, units=("mm", "mm"),
+                          marker={"color": st["color"], "size": 4}))
+    lay = _layout("Step size against displacement (Fig. 10)",
+                  "applied displacement u (mm)", "step size |Δu| (mm)")
+    _log_axis(lay["yaxis"], [v for t in data for v in t["y"] if v is not None])
+    _legend_below(lay, rows=_legend_rows([t["name"] for t in data]))
+    return {"data": data, "layout": lay}
+
+
+def _fig_wf_alpha(history, cases, styles):
+    data = []
+    for c in cases:
+        h = _case_rows(history, c["name"])
+        if not len(h):
+            continue
+        st = styles[c["name"]]
+        if h["fracture_energy"].notna().any():
+            data.append(_line(h["load"], h["fracture_energy"], f"W_f – {c['label']}",
+                              st["color"], dash="solid", legendgroup=c["name"],
+                              units=("mm", "N mm")))
+        if h["max_alpha"].notna().any():
+            data.append(_line(h["load"], h["max_alpha"], f"max α – {c['label']}",
+                              st["color"], dash="dot", yaxis="y2", legendgroup=c["name"],
+                              units=("mm", "-")))
+    lay = _layout("W_f and max α against displacement",
+                  "applied displacement u (mm)", "fracture energy W_f (N mm)")
+    lay["yaxis2"] = _axis("max α (-)", overlaying="y", side="right", range=[0, 1.05],
+                          showgrid=False, mirror=False, tickmode="auto")
+    lay["margin"]["r"] = 70
+    _legend_below(lay, rows=_legend_rows([t["name"] for t in data]))
+    if data and all((v or 0) == 0 for t in data for v in t["y"]):
+        lay["annotations"] = [{"text": "no fracture in this run: W_f = 0 and α = 0 throughout",
+                               "xref": "paper", "yref": "paper", "x": 0.5, "y": 0.6,
+                               "showarrow": False, "font": {"size": 13, "color": "#555"}}]
+    return {"data": data, "layout": lay}
+
+
+def _fig_newton(history, cases, styles):
+    data = []
+    for c in cases:
+        h = _case_rows(history, c["name"])
+        h = h[h["step"].fillna(1) > 0] if len(h) else h
+        if not len(h):
+            continue
+        st = styles[c["name"]]
+        if h["newton_iterations"].notna().any():
+            data.append(_line(h["step"], h["newton_iterations"], f"Newton iterations – {c['label']}",
+                              st["color"], width=1.2, mode="lines", legendgroup=c["name"],
+                              units=("-", "-")))
+        if h["cutbacks"].notna().any():
+            hc = h[h["cutbacks"].fillna(0) > 0]
+            data.append({"type": "scatter", "mode": "markers", "x": _rs(hc["step"]),
+                         "y": _rs(hc["cutbacks"]), "yaxis": "y2", "legendgroup": c["name"],
+                         "name": f"cut-backs – {c['label']}",
+                         "marker": {"color": st["color"], "symbol": "x", "size": 7}})
+    lay = _layout("Newton iterations and cut-backs per accepted step", "accepted step (-)",
+                  "Newton iterations per step (-)")
+    lay["yaxis"]["rangemode"] = "tozero"
+    lay["yaxis2"] = _axis("cut-backs per step (-)", overlaying="y", side="right",
+                          showgrid=False, mirror=False, rangemode="tozero", tickmode="linear",
+                          tick0=0, dtick=1)
+    lay["margin"]["r"] = 70
+    _legend_below(lay, rows=_legend_rows([t["name"] for t in data], 140))
+    return {"data": data, "layout": lay}
+
+
+def _fig_energies(history, cases, styles, features: dict | None = None):
+    """Elastic energy, and the regularisation energy and W_f where the run has them (``features``
+    of :func:`run_features`; None: all three)."""
+    data = []
+    spec = [("elastic_energy", "elastic", "solid"),
+            ("regularisation_energy", "regularisation", "dot"),
+            ("fracture_energy", "fracture W_f", "dash")]
+    if features is not None:
+        spec = [sp for sp in spec if (sp[0] != "regularisation_energy" or features.get("regulariser"))
+                and (sp[0] != "fracture_energy" or features.get("fracture"))]
+    for c in cases:
+        h = _case_rows(history, c["name"])
+        if not len(h):
+            continue
+        st = styles[c["name"]]
+        for col, label, dash in spec:
+            if h[col].notna().any():
+                name = label if len(cases) == 1 else f"{label} – {c['label']}"
+                data.append(_line(h["load"], h[col], name, st["color"] if len(cases) > 1 else
+                                  {"elastic_energy": "#1f77b4", "regularisation_energy": "#2ca02c",
+                                   "fracture_energy": "#d62728"}[col], dash=dash,
+                                  legendgroup=c["name"], units=("mm", "N mm")))
+    lay = _layout("Energies against applied displacement", "applied displacement u (mm)",
+                  "energy (N mm)")
+    lay["updatemenus"] = _log_toggle()
+    lay["yaxis"]["exponentformat"] = "power"
+    return {"data": data, "layout": lay}
+
+
+def _fig_interpolation(meta, cases):
+    params = meta.get("parameters") or {}
+    gamma0s = []
+    for c in cases:
+        g = _param_value(c.get("parameters") or {}, "gamma0")
+        if g is not None and g > 0:
+            gamma0s.append((c["label"], g))
+    if not gamma0s:
+        g = _param_value(params, "gamma0")
+        gamma0s = [(f"γ0 = {fmt(g if g else 1e-5)}", g if g else 1e-5)]
+    a = _param_value(params, "gc_a") or 10.0
+    b = _param_value(params, "gc_b") or 100.0
+    rho = np.unique(np.concatenate([np.linspace(0, 0.1, 201), np.linspace(0.1, 1, 91)]))
+    data = []
+    seen = set()
+    for k, (label, g) in enumerate(gamma0s):
+        if g in seen:
+            continue
+        seen.add(g)
+        color = CASE_COLORS[k % len(CASE_COLORS)]
+        data.append(_line(rho, gamma_of_rho(rho, g), f"γ(ρ), γ0 = {fmt(g, 3)}", color, width=2,
+                          legendgroup=f"g{k}"))
+        data.append({"type": "scatter", "mode": "markers", "x": [0.0], "y": [float(g)],
+                     "marker": {"color": color, "size": 9, "symbol": "circle-open",
+                                "line": {"width": 2}}, "showlegend": False,
+                     "legendgroup": f"g{k}", "name": f"γ(0) = γ0 = {fmt(g, 3)}",
+                     "cliponaxis": False})
+    lay1 = _layout("γ(ρ) = γ0 + (1 − γ0) ρ (Eq. 17)",
+                   "pseudo-density ρ (-)", "γ(ρ) = K/K0 = G/G0 (-)", height=380)
+    _log_axis(lay1["yaxis"], [1e-12, 1] if not gamma0s else [min(g for _, g in gamma0s), 1])
+    _legend_below(lay1, rows=_legend_rows([t["name"] for t in data if t.get("showlegend", True)]))
+    gc = gc_ratio_of_rho(rho, a, b)
+    data2 = [_line(rho, gc, f"Gc(ρ)/Gc0, a = {fmt(a)}, b = {fmt(b)}", "#d62728", width=2.2),
+             _line([0, 1], [a / 2, a / 2], f"void limit a/2 = {fmt(a / 2)}", "#777", dash="dot",
+                   width=1.2)]
+    lay2 = _layout("Gc(ρ)/Gc0 = a / (1 + exp(b ρ)) + ρ (Eq. 18)",
+                   "pseudo-density ρ (-)", "Gc(ρ) / Gc0 (-)", height=380)
+    _legend_below(lay2, rows=1)
+    return ({"data": data, "layout": lay1}, {"data": data2, "layout": lay2},
+            {"a": a, "b": b, "gamma0s": [g for _, g in gamma0s]})
+
+
+def _nice_scale(s: float) -> float:
+    if s <= 1:
+        return 1.0
+    e = math.floor(math.log10(s))
+    for m in (1, 2, 5, 10):
+        if m * 10 ** e >= s * 0.999:
+            return float(m * 10 ** e) if m < 10 else float(10 ** (e + 1))
+    return float(10 ** (e + 1))
+
+
+def deformation_scale(vertices: np.ndarray, u: np.ndarray) -> float:
+    """Scale factor for drawing the deformed mesh (dimensionless).
+
+    1 when the largest displacement is already visible (>= 1 % of the domain size, about ten
+    pixels on screen), else a round
+    number (1, 2, 5 x 10^k) making the largest displacement about 5 % of the domain size.
+    """
+    v = np.asarray(vertices, dtype=float)
+    ext = float(np.max(np.ptp(v[:, :2], axis=0))) if v.size else 0.0
+    um = float(np.nanmax(np.linalg.norm(np.asarray(u, dtype=float), axis=-1))) if np.size(u) else 0.0
+    if ext <= 0 or um <= 0 or not math.isfinite(um):
+        return 1.0
+    if um >= 0.01 * ext:
+        return 1.0
+    return _nice_scale(0.05 * ext / um)
+
+
+def _frame_indices(k: int, max_frames: int = MAX_FRAMES) -> list[int]:
+    if k <= max_frames:
+        return list(range(k))
+    idx = np.unique(np.round(np.linspace(0, k - 1, max_frames)).astype(int))
+    return [int(i) for i in idx]
+
+
+def mesh_payload(snap: dict, max_frames: int = MAX_FRAMES) -> dict | None:
+    """Compact, JSON-ready description of one case's snapshots (None if there is no mesh).
+
+    Coordinates are integers: vertex ``i`` of the undeformed mesh is at
+    ``(x0 + q * xi[i], y0 + q * yi[i])`` mm with ``q`` = 1e-4 of the domain size; frame ``f``
+    moves it by ``qu * (dx[i], dy[i])`` mm, the displacement already multiplied by the
+    deformation ``scale``. Triangles are stored once (``t``, flat, 0-based). Each frame lists only
+    the triangles whose phase field (mean of its vertices) is not in the lowest of
+    ``N_LEVELS`` colour levels, as pairs ``nz = [triangle, level, ...]``; void triangles
+    (``rho_level`` < 5, i.e. rho < 0.5) are drawn grey. At most ``max_frames`` frames are kept,
+    evenly spread over the recorded ones, always including the last.
+    """
+    if not snap or "vertices" not in snap or "triangles" not in snap:
+        return None
+    V = np.asarray(snap["vertices"], dtype=float)
+    T = np.asarray(snap["triangles"])
+    if V.ndim != 2 or V.shape[0] == 0 or V.shape[1] < 2 or T.ndim != 2 or T.shape[1] != 3 \
+            or T.size == 0 or not np.issubdtype(T.dtype, np.integer):
+        return None
+    T = T.astype(np.int64)
+    if T.max() >= V.shape[0] or T.min() < 0:
+        return None
+    nt, nv = T.shape[0], V.shape[0]
+    x0, y0 = float(V[:, 0].min()), float(V[:, 1].min())
+    ext = float(max(np.ptp(V[:, 0]), np.ptp(V[:, 1]))) or 1.0
+    q = float(f"{ext * 1e-4:.3g}")
+    rho = np.asarray(snap.get("rho", np.ones(nt)), dtype=float).ravel()
+    if rho.size != nt:
+        rho = np.ones(nt)
+    rho = np.nan_to_num(rho, nan=1.0)
+    void = rho < 0.5
+    out = {"x0": x0, "y0": y0, "q": q,
+           "xi": np.round((V[:, 0] - x0) / q).astype(np.int64),
+           "yi": np.round((V[:, 1] - y0) / q).astype(np.int64),
+           "t": T.ravel(), "rho_level": np.clip(np.round(rho * 10), 0, 10).astype(np.int64),
+           "nt": int(nt), "nv": int(nv), "dim": int(V.shape[1]), "frames": [], "scale": 1.0,
+           "n_recorded": 0, "extent": ext, "n_void": int(void.sum()), "u_max": None}
+    loads = np.asarray(snap.get("loads", []), dtype=float).ravel()
+    U = snap.get("u")
+    A = snap.get("alpha")
+    k = len(loads)
+    if U is None or k == 0:
+        return out
+    U = np.asarray(U, dtype=float)
+    if U.ndim == 2 and k == 1:
+        U = U[None]
+    if U.ndim != 3 or U.shape[0] < k or U.shape[1] != nv or U.shape[2] < 2:
+        return out
+    if A is not None:
+        A = np.asarray(A, dtype=float)
+        if A.ndim == 1 and k == 1:
+            A = A[None]
+        if A.ndim != 2 or A.shape[0] < k or A.shape[1] != nv:
+            A = None
+    U = np.nan_to_num(U[:k], nan=0.0)
+    scale = deformation_scale(V, U)
+    um = float(np.max(np.linalg.norm(U, axis=-1))) if U.size else 0.0
+    qu = float(f"{max(q, scale * um / 500.0):.3g}")
+    out.update({"scale": scale, "n_recorded": k, "u_max": um, "qu": qu,
+                "has_alpha": A is not None})
+    for i in _frame_indices(k, max_frames):
+        fr = {"load": float(f"{loads[i]:.6g}"),
+              "dx": np.round(scale * U[i][:, 0] / qu).astype(np.int64),
+              "dy": np.round(scale * U[i][:, 1] / qu).astype(np.int64)}
+        if A is not None:
+            a_tri = np.nan_to_num(A[i][T].mean(axis=1), nan=0.0)
+            lev = np.clip(np.floor(a_tri * N_LEVELS), 0, N_LEVELS - 1).astype(np.int64)
+            lev[void] = 0
+            nz = np.flatnonzero(lev)
+            fr["nz"] = np.column_stack([nz, lev[nz]]).ravel()
+            fr["alpha_max"] = float(f"{np.nanmax(A[i]):.4g}")
+        else:
+            fr["nz"] = np.zeros(0, dtype=np.int64)
+            fr["alpha_max"] = None
+        out["frames"].append(fr)
+    return out
+
+
+def _same_mesh(a: dict, b: dict) -> bool:
+    return (a["nv"] == b["nv"] and a["nt"] == b["nt"] and a["x0"] == b["x0"]
+            and a["y0"] == b["y0"] and a["q"] == b["q"] and np.array_equal(a["xi"], b["xi"])
+            and np.array_equal(a["yi"], b["yi"]) and np.array_equal(a["t"], b["t"])
+            and np.array_equal(a["rho_level"], b["rho_level"]))
+
+
+def _level_colors(colorscale, n: int) -> list[str]:
+    from plotly.colors import sample_colorscale, get_colorscale
+    cs = get_colorscale(colorscale) if isinstance(colorscale, str) else colorscale
+    return sample_colorscale(cs, [(i + 0.5) / n for i in range(n)])
+
+
+def _fig_speed_error(entries: list[dict], title: str, size_label: str):
+    pts = sorted((e for e in entries if _finite(e.get("wall_time_s"))),
+                 key=lambda e: float(e["wall_time_s"]))
+    data = []
+    for key, name, color, sym in (("err_finest", "error vs finest", "#1f77b4", "circle"),
+                                  ("err_published", "error vs published", "#d62728", "diamond")):
+        p = [e for e in pts if _finite(e.get(key))]
+        if not p:
+            continue
+        data.append({"type": "scatter", "mode": "markers+text+lines",
+                     "x": _rs([e["wall_time_s"] for e in p]), "y": _rs([e[key] for e in p]),
+                     "text": [e["label"] for e in p], "textposition": "top center",
+                     "cliponaxis": False,
+                     "name": name, "line": {"color": color, "width": 1, "dash": "dot"},
+                     "marker": {"color": color, "size": 10, "symbol": sym},
+                     "hovertemplate": "%{text}<br>wall time %{x} s<br>error %{y:.3g} %<extra></extra>"})
+    lay = _layout(title, "wall time (s)", "relative error in peak force (%)")
+    times = [float(e["wall_time_s"]) for e in pts if float(e["wall_time_s"]) > 0]
+    if times and max(times) / min(times) > 20:
+        lay["xaxis"]["type"] = "log"
+    lay["yaxis"]["rangemode"] = "tozero"
+    return {"data": data, "layout": lay}

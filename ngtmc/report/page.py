@@ -1,0 +1,265 @@
+"""The HTML report of one run folder (``report.html``), from the template ``report.html.j2``."""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .loading import _case_list, load_run
+from .numbers import (
+    _finite, _pct, _run_speed_entries, case_numbers, fmt, fmt_date, fmt_duration, fmt_u, key_number_rows,
+    overrides_text, reference_peaks, run_features, time_split_rows)
+from .figures import (
+    ALPHA_COLORSCALE, FONT, MAX_EDGE_TRIANGLES, MAX_FRAMES, MAX_VERTEX_FRAMES, N_LEVELS, RHO_COLORSCALE,
+    _case_style, _fig_energies, _fig_force, _fig_interpolation, _fig_newton, _fig_speed_error,
+    _fig_step_size, _fig_wf_alpha, _level_colors, _same_mesh, mesh_payload)
+
+
+def _env():
+    import jinja2
+    loader = jinja2.FileSystemLoader(str(Path(__file__).resolve().parent.parent / "templates"))
+    env = jinja2.Environment(loader=loader, autoescape=jinja2.select_autoescape(["html", "j2"]),
+                             trim_blocks=True, lstrip_blocks=True)
+    env.filters["fmt"] = fmt
+    env.filters["fmt_u"] = fmt_u
+    return env
+
+
+def _script_json(obj) -> str:
+    """JSON safe to place inside a <script> element."""
+    s = json.dumps(obj, separators=(",", ":"), allow_nan=False, default=_json_default)
+    return s.replace("</", "<\\/").replace("<!--", "<\\!--")
+
+
+def _json_default(o):
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o) if math.isfinite(float(o)) else None
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serialisable: {type(o)}")
+
+
+def _clean(obj):
+    """Replace NaN/inf by None recursively (JSON has no NaN)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+def _plotly_js() -> str:
+    from plotly.offline import get_plotlyjs
+    return get_plotlyjs().replace("</script", "<\\/script")
+
+
+def _status_banner(status: str) -> dict | None:
+    s = (status or "unknown").lower()
+    if s == "completed":
+        return None
+    texts = {
+        "failed": "This run FAILED before reaching the end of its load path: the curves and "
+                  "numbers below are partial.",
+        "running": "This run was still RUNNING when the report was rendered: the curves and "
+                   "numbers below are partial.",
+        "interrupted": "This run was INTERRUPTED: the curves and numbers below stop where it "
+                       "stopped (it can be resumed from its checkpoint).",
+    }
+    return {"status": s, "text": texts.get(s, f"Run status is '{s}': results may be incomplete.")}
+
+
+def _parameter_rows(params: dict) -> list[dict]:
+    rows = []
+    for name, p in (params or {}).items():
+        if isinstance(p, dict):
+            v, unit, desc = p.get("value"), p.get("unit") or "-", p.get("description") or ""
+        else:
+            v, unit, desc = p, "-", ""
+        if isinstance(v, (list, tuple)):
+            vs = ", ".join(fmt(x) for x in v)
+        elif isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+            vs = fmt(v, 6)
+        else:
+            vs = str(v)
+        rows.append({"name": name, "value": vs, "unit": unit, "description": desc})
+    return rows
+
+
+def _mesh_rows(mesh: dict) -> list[dict]:
+    spec = [("n_elements", "elements", "-"), ("n_vertices", "vertices", "-"),
+            ("ndof_u", "displacement dofs", "-"), ("ndof_alpha", "phase-field dofs", "-"),
+            ("h_min", "smallest element size h_min", "mm"),
+            ("h_max", "largest element size h_max", "mm")]
+    rows = []
+    for key, label, unit in spec:
+        if key in mesh:
+            rows.append({"label": label, "value": fmt_u(mesh[key], unit)})
+    for key, v in mesh.items():
+        if key not in dict((s[0], 1) for s in spec) and isinstance(v, (int, float, str)):
+            rows.append({"label": key.replace("_", " "), "value": fmt(v)})
+    return rows
+
+
+def render_report(run_dir, output=None) -> Path:
+    """Render the HTML report of one run directory.
+
+    Parameters
+    ----------
+    run_dir : str or Path
+        Run directory (docs/run-directory.md). Only its recorded files are read.
+    output : str or Path, optional
+        Where to write the page; default ``run_dir / "report.html"``.
+
+    Returns
+    -------
+    pathlib.Path of the written, self-contained HTML page (plotly.js embedded, no request to
+    any other host). Sections: header and parameters, force against displacement with the
+    references, key numbers, step history, phase-field snapshots on the deformed mesh, density
+    and mesh, energies, speed against error, and for ``contact_gamma0`` the interpolation rules.
+    """
+    run_dir = Path(run_dir)
+    meta, history, snapshots = load_run(run_dir)
+    cases = _case_list(meta)
+    styles = _case_style(cases)
+    fu = meta.get("force_unit") or "N"
+    study = str(meta.get("study", ""))
+    has_hist = bool(len(history)) and history["load"].notna().any()
+    features = run_features(meta, history, snapshots)
+
+    figs: dict[str, dict] = {}
+    figs["fig-force"] = _fig_force(meta, history, cases, styles)
+    if study == "contact_gamma0":
+        figs["fig-force-log"] = _fig_force(meta, history, cases, styles, log_y=True)
+    figs["fig-step-size"] = _fig_step_size(history, cases, styles)
+    if features["fracture"]:
+        figs["fig-wf-alpha"] = _fig_wf_alpha(history, cases, styles)
+    figs["fig-newton"] = _fig_newton(history, cases, styles)
+    figs["fig-energies"] = _fig_energies(history, cases, styles, features)
+
+    interp = None
+    if study == "contact_gamma0":
+        f1, f2, info = _fig_interpolation(meta, cases)
+        figs["fig-gamma"] = f1
+        if features["fracture"]:       # Gc(rho) matters only where something may break
+            figs["fig-gc"] = f2
+        interp = dict(info, gc=features["fracture"])
+
+    speed = _run_speed_entries(meta, history, cases) if len(cases) >= 2 else []
+    speed_meaningful = len(speed) >= 2 and study != "contact_gamma0"
+    if speed_meaningful:
+        figs["fig-speed-error"] = _fig_speed_error(
+            speed, "Wall time against error in peak force (cases of this run)", "steps")
+
+    # snapshots
+    meshes = {}
+    mesh_info = []
+    if snapshots:
+        # frame budget: about MAX_VERTEX_FRAMES vertex positions over all cases
+        n_vert = sum(int(np.shape(sn.get("vertices", ()))[0]) for sn in snapshots.values()
+                     if isinstance(sn, dict) and np.ndim(sn.get("vertices", ())) == 2)
+        frame_cap = max(2, min(MAX_FRAMES, MAX_VERTEX_FRAMES // max(n_vert, 1)))
+        for c in cases + [{"name": n, "label": n, "parameters": {}}
+                          for n in snapshots if n not in {c["name"] for c in cases}]:
+            snap = snapshots.get(c["name"])
+            payload = mesh_payload(snap, frame_cap) if snap else None
+            if payload is None:
+                continue
+            meshes[c["name"]] = payload
+            same_as = None
+            for prev in mesh_info:
+                if _same_mesh(meshes[prev["case"]], payload):
+                    same_as = prev
+                    break
+            if same_as is not None:
+                same_as["shared_with"].append(c["label"])
+                # the base mesh is sent once: this case refers to the first one holding it
+                payload["mesh_of"] = same_as["case"]
+                for key in ("xi", "yi", "t", "rho_level"):
+                    payload.pop(key)
+            mesh_info.append({
+                "same_as": same_as["label"] if same_as else None, "shared_with": [],
+                "case": c["name"], "label": c["label"], "scale": payload["scale"],
+                "n_frames": len(payload["frames"]), "n_recorded": payload["n_recorded"],
+                "has_alpha": payload.get("has_alpha", False),
+                "fracture": any((fr.get("alpha_max") or 0) > 0 for fr in payload["frames"]),
+                "edges": payload["nt"] <= MAX_EDGE_TRIANGLES,
+                "nt": payload["nt"], "nv": payload["nv"], "dim": payload["dim"],
+                "u_max": payload.get("u_max"), "n_void": payload["n_void"],
+                "snap_id": f"snap-{len(mesh_info)}", "mesh_id": f"mesh-{len(mesh_info)}",
+                "loads": [fr["load"] for fr in payload["frames"]]})
+    mesh_plot_ids = {}
+    for mi in mesh_info:
+        if mi["n_frames"]:
+            mesh_plot_ids[mi["snap_id"]] = {"case": mi["case"], "kind": "alpha",
+                                            "label": mi["label"], "scale": fmt(mi["scale"]),
+                                            "scale_num": mi["scale"],
+                                            "fracture": mi["fracture"]}
+        if not mi["same_as"]:
+            n_other = len(mi["shared_with"])
+            mesh_plot_ids[mi["mesh_id"]] = {
+                "case": mi["case"], "kind": "rho", "edges": mi["edges"],
+                "label": mi["label"] + (f" (same mesh in {n_other} more case"
+                                        f"{'s' if n_other > 1 else ''})" if n_other else "")}
+
+    created = meta.get("created")
+    versions = meta.get("versions") or {}
+    mesh = meta.get("mesh") or {}
+    ref_peaks = reference_peaks(meta)
+    case_nums = [dict(case_numbers(meta, history, c["name"]), label=c["label"]) for c in cases]
+    for cn in case_nums:
+        cn["ref_diffs"] = []
+        for rp in ref_peaks:
+            d = None
+            if _finite(cn.get("peak_force")) and rp["peak"]:
+                d = (cn["peak_force"] - rp["peak"]) / abs(rp["peak"]) * 100
+            dl = None
+            if _finite(cn.get("peak_load")) and rp["at"]:
+                dl = (cn["peak_load"] - rp["at"]) / abs(rp["at"]) * 100
+            cn["ref_diffs"].append({"force": _pct(d), "load": _pct(dl)})
+
+    ctx = {
+        "meta": meta, "study": study, "title": meta.get("title") or study,
+        "summary": meta.get("summary_text") or "", "resolution": meta.get("resolution") or "–",
+        "created": fmt_date(created), "status": meta.get("status"),
+        "banner": _status_banner(meta.get("status")),
+        "versions": versions, "git_revision": meta.get("git_revision") or "–",
+        "parameters": _parameter_rows(meta.get("parameters")), "mesh_rows": _mesh_rows(mesh),
+        "n_elements": fmt(mesh.get("n_elements")),
+        "ndof": fmt((mesh.get("ndof_u") or 0) + (mesh.get("ndof_alpha") or 0))
+        if ("ndof_u" in mesh or "ndof_alpha" in mesh) else "–",
+        "ndof_parts": "u + α" if (mesh.get("ndof_alpha") or 0) > 0 else (
+            "u" if "ndof_u" in mesh or "ndof_alpha" in mesh else ""),
+        "features": features, "overrides": overrides_text(meta),
+        "wall_time": fmt_duration(meta.get("wall_time_s")),
+        "thickness": fmt_u(meta.get("thickness_mm"), "mm"), "force_unit": fu,
+        "cases": cases, "styles": styles, "has_history": has_hist,
+        "n_rows": int(len(history)),
+        "references": [r for r in meta.get("references") or [] if isinstance(r, dict)],
+        "key_rows": key_number_rows(meta, history), "ref_peaks": ref_peaks,
+        "case_nums": case_nums, "interp": interp,
+        "speed": speed, "speed_meaningful": speed_meaningful,
+        "time_split": time_split_rows(meta, history, cases),
+        "mesh_info": mesh_info, "has_snapshots": bool(mesh_info),
+        "fig_ids": list(figs), "mesh_plot_ids": mesh_plot_ids,
+        "fig_json": _script_json(_clean(figs)), "mesh_json": _script_json(_clean(meshes)),
+        "mesh_plot_json": _script_json(mesh_plot_ids),
+        "colors_json": _script_json({"alpha": _level_colors(ALPHA_COLORSCALE, N_LEVELS),
+                                     "rho": _level_colors(RHO_COLORSCALE, 11),
+                                     "alpha_scale": ALPHA_COLORSCALE,
+                                     "rho_scale": RHO_COLORSCALE, "font": FONT}),
+        "plotly_js": _plotly_js(),
+        "generated": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "run_name": run_dir.resolve().name,
+    }
+    page = _env().get_template("report.html.j2").render(**ctx)
+    out = Path(output) if output is not None else run_dir / "report.html"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(page, encoding="utf-8")
+    return out
