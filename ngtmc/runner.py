@@ -18,6 +18,11 @@ solve times aside). A resume takes the recorded overrides and refuses other ones
 unreadable checkpoint (named in a warning) for the older generation, and never rewrites the rows
 of a completed case (see :mod:`ngtmc.runfiles`).
 
+The per-step outputs (snapshots and VTK, checkpoints, progress, user callbacks) are the plugins
+of :mod:`ngtmc.plugins`, passed to ``Simulation.run(callbacks=...)``. A user's own scene goes
+through the same run: :func:`run_scene` (``ngtmc.simulate(..., out_dir=...)``) wraps it in a
+one-case study (:func:`scene_study`).
+
 A failed run (:class:`ngtmc.StepFailure`) still writes its history and metadata, with status
 ``"failed"`` and the error message, and then re-raises. An interrupted run (KeyboardInterrupt)
 gets status ``"interrupted"``.
@@ -46,7 +51,8 @@ from .scene import _names
 from .snapshots import Snapshots
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
 
-__all__ = ["run_study", "default_output", "HISTORY_COLUMNS", "case_results", "write_atomic"]
+__all__ = ["run_study", "run_scene", "scene_study", "default_output", "HISTORY_COLUMNS", "case_results",
+           "write_atomic"]
 
 #: Columns of history.csv, in order: ``case``, then the Simulation's history columns
 #: (:data:`ngtmc.runfiles.HISTORY_UNITS`, their units).
