@@ -29,7 +29,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from .runfiles import HISTORY_UNITS as _HISTORY_UNITS
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units
 from .scene import Scene
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ChangeControl, Schedule, StepObservation
@@ -170,10 +170,11 @@ class Simulation:
         s = self.solver
         t0 = time.perf_counter()
         en = s.energies()
+        forces = s.reactions(reuse_residual=self.step > 0)
         row = {
             "step": self.step,
             "load": s.load,
-            "force": s.reaction(reuse_residual=self.step > 0),
+            "force": forces[self.scene.force_load.label],
             "fracture_energy": en["fracture_energy"],
             "dissipated_energy": en["dissipated_energy"],
             "elastic_energy": en["elastic_energy"],
@@ -189,14 +190,18 @@ class Simulation:
             "solve_time": info["solve_time"],
             "assembly_time": info["assembly_time"],
         }
+        if len(forces) > 1:
+            row.update({f"force_{n}": f for n, f in forces.items()})
+        row.update({f"displacement_{n}": v for n, v in s.load_displacements().items()})
         self.rows.append(row)
         s.timings["record"] += time.perf_counter() - t0
         return row
 
     @property
     def history(self) -> pd.DataFrame:
-        """Accepted steps so far as a DataFrame (units in :data:`HISTORY_UNITS`)."""
-        return pd.DataFrame(self.rows, columns=list(HISTORY_UNITS))
+        """Accepted steps so far as a DataFrame (units in :attr:`units`: :data:`HISTORY_UNITS` and the
+        columns of the scene's loads, see :func:`ngtmc.runfiles.history_units`)."""
+        return pd.DataFrame(self.rows, columns=list(self.units))
 
     @property
     def finished(self) -> bool:
@@ -437,7 +442,8 @@ class Simulation:
 
     @property
     def units(self) -> dict:
-        return dict(HISTORY_UNITS)
+        """History column -> unit for this scene (:func:`ngtmc.runfiles.history_units`)."""
+        return history_units({ld.label: type(ld).__name__ for ld in self.scene.loads})
 
     # ------------------------------------------------------------------ checkpoints
     def get_state(self) -> dict:
