@@ -384,9 +384,13 @@ class Simulation:
             cutbacks += 1
             smaller = ctrl.failed(t_new - self.t)
             if smaller is None:
-                msg = (f"step from load {self.schedule.load(self.t):.6g} mm failed at the minimum increment "
+                unit = "" if self.scene.force_controlled else " mm"  # lambda scales tractions
+                msg = (f"step from load {self.schedule.load(self.t):.6g}{unit} failed at the minimum increment "
                        f"du_min = {ctrl.du_min:g} mm ({info.get('message', '')}); {len(self.rows)} accepted steps are in "
                        f"the history carried by this exception")
+                peak = self._force_control_peak()
+                if peak:
+                    msg = peak + " " + msg
                 raise StepFailure(msg, self.history, saved)
             du = smaller
         step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new > self.t else 0.0
@@ -408,6 +412,27 @@ class Simulation:
                                          cutbacks=cutbacks)
         self._report_progress(row)
         return row
+
+    def _force_control_peak(self) -> str:
+        """Under force control (only Traction loads), a message when the last accepted steps show a
+        falling stiffness d force / d displacement of the force load: the failed step is then past a
+        limit point, which force control cannot pass. Empty string otherwise."""
+        sc = self.scene
+        if not sc.force_controlled or len(self.rows) < 3:
+            return ""
+        name = sc.force_load.label
+        f = np.array([r["force"] for r in self.rows[-3:]])
+        u = np.array([r[f"displacement_{name}"] for r in self.rows[-3:]])
+        du = np.diff(u)
+        if np.any(du == 0.0):
+            return ""
+        k = np.diff(f) / du
+        if not (abs(k[1]) < abs(k[0])):
+            return ""
+        return (f"force control cannot pass a peak: the stiffness of traction {name!r} fell from {k[0]:.4g} to "
+                f"{k[1]:.4g} N/mm over the last steps and no equilibrium was found beyond force {f[-1]:.6g} N "
+                f"(displacement {u[-1]:.6g} mm); the force-displacement curve has a limit point here. Use a "
+                f"displacement load (DisplacementLoad or DisplacementField) to follow the curve past it.")
 
     def _report_progress(self, row):
         if not self.progress:

@@ -62,3 +62,85 @@ def test_uniform_field_gives_the_uniform_load(order):
     sc.load = ngtmc.DisplacementField("right", lambda x, y, lam: (lam, 0.0), components="x")
     h = ngtmc.simulate(sc, 0.01).history
     assert np.allclose(h["force"], ref["force"], rtol=1e-7, atol=0)
+
+
+def _two_loads(**kw):
+    return ngtmc.Scene(bar_mesh(), MAT, supports=[ngtmc.Support("bottom", y=True)],
+                       load=[ngtmc.DisplacementLoad("left", "-x"), ngtmc.DisplacementLoad("right", "x")], **kw)
+
+
+def test_two_opposite_loads_give_equal_and_opposite_reactions():
+    res = ngtmc.simulate(_two_loads(), 0.005)
+    h, units = res.history, res.units
+    assert units["force_left"] == units["force_right"] == "N"
+    assert list(h.columns)[:len(ngtmc.HISTORY_UNITS)] == list(ngtmc.HISTORY_UNITS)
+    assert h["force_right"].iloc[-1] > 0
+    # each resists its own motion (+), so along x they are equal and opposite
+    assert h["force_left"].to_numpy() == pytest.approx(h["force_right"].to_numpy(), rel=1e-8, abs=1e-12)
+    assert np.array_equal(h["force"], h["force_left"])          # default: the first load
+    # stretching from both ends by lam is the one-sided stretch by 2 lam
+    one = ngtmc.simulate(tension_bar(fracture=False), 0.01).history["force"].iloc[-1]
+    assert h["force_right"].iloc[-1] == pytest.approx(one, rel=1e-7)
+    named = ngtmc.simulate(_two_loads(force_from="right"), 0.005).history
+    assert np.array_equal(named["force"], named["force_right"])
+
+
+def test_point_load_reaction_is_the_residual_at_the_vertex():
+    mesh = bar_mesh()
+    tip = ngtmc.Point(near=(1.0, 0.2))
+    sc = ngtmc.Scene(mesh, MAT, supports=[ngtmc.Support("left", x=True, y=True)],
+                     load=ngtmc.DisplacementLoad(tip, "-y"), order=2)
+    res = ngtmc.simulate(sc, 0.01)
+    s = res.solver
+    v = tip.vertex(mesh)
+    assert np.allclose(mesh.ngmesh.Coordinates()[v], (1.0, 0.2))
+    r = s.u.vec.CreateVector()
+    s.a_u.Apply(s.u.vec, r)
+    dof = s._vertex_dof(v, 1)
+    assert res.history["force"].iloc[-1] == pytest.approx(-r[dof] * sc.thickness, rel=1e-12)
+    assert res.history["force"].iloc[-1] > 0
+    assert s.u(mesh(1.0, 0.2))[1] == pytest.approx(-0.01, abs=1e-12)
+
+
+def test_named_point_support():
+    """Lateral contraction pinned at one named corner instead of the whole bottom edge: uniform
+    uniaxial stretch either way, so the same force."""
+    from netgen.occ import OCCGeometry, Rectangle, X, Y
+    face = Rectangle(1.0, 0.2).Face()
+    face.faces.name = "bar"
+    face.edges.Min(X).name = "left"
+    face.edges.Max(X).name = "right"
+    face.vertices.Min(X + Y).name = "origin"
+    mesh = ngs.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=0.1))
+    sc = ngtmc.Scene(mesh, MAT, supports=[ngtmc.Support("left", x=True), ngtmc.Support(ngtmc.Point("origin"), y=True)],
+                     load=ngtmc.DisplacementLoad("right", "x"))
+    f = ngtmc.simulate(sc, 0.01).history["force"].iloc[-1]
+    ref = ngtmc.simulate(tension_bar(fracture=False), 0.01).history["force"].iloc[-1]
+    assert f == pytest.approx(ref, rel=1e-7)
+
+
+def test_force_control_reproduces_displacement_control():
+    """A bar stretched by 20 %: the traction-driven curve (force, work-conjugate displacement)
+    lies on the displacement-driven one."""
+    disp = ngtmc.simulate(tension_bar(fracture=False), 0.2).history
+    sc = tension_bar(fracture=False)
+    F_end = float(disp["force"].iloc[-1])
+    sc.load = ngtmc.Traction("right", (F_end / 0.2, 0.0))        # MPa per unit lambda, 0.2 mm high
+    res = ngtmc.simulate(sc, ngtmc.Schedule([0.0, 1.0]), ngtmc.AdaptiveStepControl(du_max=0.1, du_min=1e-6))
+    h = res.history
+    assert res.units["displacement_right"] == "mm"
+    assert h["force"].iloc[-1] == pytest.approx(F_end, rel=1e-12)
+    assert h["displacement_right"].iloc[-1] == pytest.approx(0.2, rel=1e-6)
+    # displacement control through the displacements reached under force control
+    again = ngtmc.simulate(tension_bar(fracture=False), ngtmc.Schedule(list(h["displacement_right"])),
+                           ngtmc.AdaptiveStepControl(du_max=1.0, du_min=1e-9)).history
+    assert np.allclose(again["load"], h["displacement_right"], rtol=1e-12, atol=0)
+    assert np.allclose(again["force"], h["force"], rtol=1e-7, atol=1e-9 * F_end)
+
+
+def test_force_control_stops_clearly_at_the_peak():
+    sc = tension_bar(maxh=0.2, Gc=1e-3, l0=1.0)
+    sc.load = ngtmc.Traction("right", (1.0, 0.0))       # MPa per unit lambda; the peak is near 0.34
+    with pytest.raises(ngtmc.StepFailure, match=r"force control cannot pass a peak.*stiffness of traction 'right' fell"):
+        ngtmc.simulate(sc, 1.0, ngtmc.AdaptiveStepControl(du_max=0.1, du_min=1e-3), scheme="staggered",
+                       max_staggered=12)
