@@ -234,7 +234,7 @@ class DisplacementField:
             raise TypeError("values() is for callable fields")
         if not np.all(np.isfinite(out)):
             bad = int(np.argmax(~np.all(np.isfinite(out), axis=0)))
-            raise ValueError(f"{where}: the field is not finite (NaN or inf) at {tuple(pts[bad])} mm, lam = {lam:g}")
+            raise ValueError(f"{where}: the field is not finite (NaN or inf) at {tuple(float(v) for v in pts[bad])} mm, lam = {lam:g}")
         return out
 
 
@@ -629,7 +629,9 @@ class Scene:
                 self._check_field(ld, desc, key)
             if isinstance(ld, Traction):
                 ld.vector(d)
-                for c in range(d):
+                acting = range(d) if isinstance(ld.traction, ngs.CoefficientFunction) else \
+                    [c for c in range(d) if float(np.asarray(ld.traction, dtype=float)[c]) != 0.0]
+                for c in acting:
                     if (key, c) in held and not held[(key, c)][1]:
                         raise ValueError(f"{desc} acts on component {_LETTERS[c]} that {held[(key, c)][0]} already "
                                          "holds: a load on a held component does nothing; remove one of them")
@@ -660,7 +662,7 @@ class Scene:
         vals = np.asarray(ld.field(mesh(*[pts[:, i] for i in range(d)]))).reshape(len(pts), d)
         if not np.all(np.isfinite(vals)):
             bad = int(np.argmax(~np.all(np.isfinite(vals), axis=1)))
-            raise ValueError(f"{desc}: the field is not finite (NaN or inf) at {tuple(pts[bad])} mm")
+            raise ValueError(f"{desc}: the field is not finite (NaN or inf) at {tuple(float(v) for v in pts[bad])} mm")
 
     def _check_patterns(self, regions):
         """Each mesh region matched by at most one pattern of ``materials`` and of ``density``; every

@@ -144,3 +144,68 @@ def test_force_control_stops_clearly_at_the_peak():
     with pytest.raises(ngtmc.StepFailure, match=r"force control cannot pass a peak.*stiffness of traction 'right' fell"):
         ngtmc.simulate(sc, 1.0, ngtmc.AdaptiveStepControl(du_max=0.1, du_min=1e-3), scheme="staggered",
                        max_staggered=12)
+
+
+def test_adjoint_with_a_field_load_and_refusal_of_tractions():
+    """The adjoint takes displacement fields (here a callable, so d u_D / d lambda is evaluated at
+    each lambda_n): the reaction of an elastic bar is linear in E, so dF/dE = F / E."""
+    from ngtmc import sensitivities as S
+    sc = tension_bar(fracture=False)
+    sc.load = ngtmc.DisplacementField("right", lambda x, y, lam: (lam + 0 * x, 0 * y), components="x")
+    g, path = S.differentiate(sc, 0.01, S.ReactionAtStep(-1), wrt=("E",), newton=ngtmc.NewtonOptions(rtol=1e-12))
+    assert g["E"] == pytest.approx(g["value"] / 1000.0, rel=1e-6)
+    sc.load = ngtmc.Traction("right", (1.0, 0.0))
+    with pytest.raises(ValueError, match=r"adjoint does not handle Traction loads.*\['right'\]"):
+        S.record_path(sc, 0.1)
+
+
+def _bar(**kw):
+    args = dict(supports=[ngtmc.Support("left", x=True), ngtmc.Support("bottom", y=True)],
+                load=ngtmc.DisplacementLoad("right", "x"))
+    args.update(kw)
+    return ngtmc.Scene(bar_mesh(maxh=0.2), MAT, **args)
+
+
+def _nan_field(x, y, lam):
+    return (np.where(y > 0.1, np.nan, lam), 0 * y)
+
+
+#: Each invalid set-up and the message it gets, before any solve (the table of the README).
+VALIDATION = [
+    ("unknown boundary", dict(load=ngtmc.DisplacementField("rigth", ngs.CF((1, 0)))),
+     r"DisplacementField: unknown boundary 'rigth'; the mesh has boundaries \['bottom', 'left', 'right', 'top'\]"),
+    ("unknown point", dict(supports=[ngtmc.Support(ngtmc.Point("tip"), x=True, y=True)]),
+     r"Point\('tip'\): unknown point name 'tip'; the mesh has named points \[\]"),
+    ("point of the wrong dimension", dict(load=ngtmc.DisplacementLoad(ngtmc.Point(near=(1, 0.2, 0)), "x")),
+     r"Point\(near=\(1.0, 0.2, 0.0\)\): the coordinate has 3 entries; the mesh is 2D"),
+    ("CF field of the wrong dimension", dict(load=ngtmc.DisplacementField("right", ngs.CF((1, 0, 0)))),
+     r"DisplacementField 'right' on 'right': the field has 3 components; the mesh is 2D"),
+    ("callable of the wrong shape", dict(load=ngtmc.DisplacementField("right", lambda x, y, lam: (lam * x,))),
+     r"DisplacementField 'right' on 'right': the callable returned \(1, \d+\); expected 2 components"),
+    ("callable with the wrong arguments", dict(load=ngtmc.DisplacementField("right", lambda x, lam: (x, x))),
+     r"DisplacementField 'right' on 'right': calling the field with 2 coordinate arrays and lam failed"),
+    ("callable returning NaN", dict(load=ngtmc.DisplacementField("right", _nan_field)),
+     r"DisplacementField 'right' on 'right': the field is not finite \(NaN or inf\) at \(1.0, 0.2\) mm, lam = 0"),
+    ("traction of the wrong shape", dict(load=ngtmc.Traction("right", (1.0, 0.0, 0.0))),
+     r"Traction 'right' on 'right': traction has shape \(3,\); expected \(2,\) for a 2D mesh"),
+    ("two supports on one component", dict(supports=[ngtmc.Support("left", x=True), ngtmc.Support("left", x=True, y=True)]),
+     r"two conditions on component x of 'left': Support on 'left' and Support on 'left'"),
+    ("two loads on one component", dict(load=[ngtmc.DisplacementLoad("right", "x", name="a"),
+                                              ngtmc.DisplacementField("right", ngs.CF((1, 0)), name="b")]),
+     r"two conditions on component x of 'right': DisplacementLoad 'a' on 'right' and DisplacementField 'b' on 'right'"),
+    ("load on a held component", dict(load=ngtmc.DisplacementLoad("left", "x")),
+     r"DisplacementLoad 'left' on 'left' acts on component x that Support on 'left' already holds"),
+    ("traction on a held component", dict(load=ngtmc.Traction("bottom", (0.0, 1.0))),
+     r"Traction 'bottom' on 'bottom' acts on component y that Support on 'bottom' already holds"),
+    ("two loads with one name", dict(load=[ngtmc.DisplacementLoad("right", "x"), ngtmc.DisplacementLoad("top", "y", name="right")]),
+     r"loads \['right'\] share a name"),
+    ("force_from naming no load", dict(force_from="top"),
+     r"Scene.force_from = 'top' names no load; the loads are \['right'\]"),
+]
+
+
+@pytest.mark.parametrize("what, kw, message", VALIDATION, ids=[v[0] for v in VALIDATION])
+def test_invalid_conditions_are_refused_before_any_solve(what, kw, message):
+    sc = _bar(**kw)
+    with pytest.raises(ValueError, match=message):
+        ngtmc.Simulation(sc, 0.01)
