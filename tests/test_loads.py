@@ -209,3 +209,16 @@ def test_invalid_conditions_are_refused_before_any_solve(what, kw, message):
     sc = _bar(**kw)
     with pytest.raises(ValueError, match=message):
         ngtmc.Simulation(sc, 0.01)
+
+
+def test_readme_loads_example_runs():
+    import pathlib
+    import re
+    text = (pathlib.Path(__file__).resolve().parents[1] / "README.md").read_text()
+    code = re.findall(r"```python\n(.*?)```", text, flags=re.S)[1]
+    assert "DisplacementField" in code and len(code.strip().splitlines()) <= 25
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    h = namespace["history"]
+    assert h["load"].iloc[-1] == pytest.approx(1.0)
+    assert np.max(np.abs(h["force"])) < 1e-9 and np.max(np.abs(h["elastic_energy"])) < 1e-12
