@@ -35,7 +35,8 @@ SCHEMA_VERSION = 2
 #: Columns of a Simulation's history, in order, with their units (``history.csv`` has a ``case``
 #: column first). In 2D, force and energies are for the scene thickness: the force of a study run
 #: with thickness 1 mm is in N per mm (``force_unit`` in metadata.json). The one definition used
-#: by :data:`ngtmc.HISTORY_UNITS`, :data:`ngtmc.runner.HISTORY_COLUMNS` and the report.
+#: by :data:`ngtmc.HISTORY_UNITS`, :data:`ngtmc.runner.HISTORY_COLUMNS` and the report. A scene
+#: with several loads or a traction adds columns after these by the rule of :func:`history_units`.
 HISTORY_UNITS = {
     "step": "-",
     "load": "mm",

@@ -2,9 +2,10 @@
 
 A :class:`Scene` names a mesh with regions and boundaries, the material and pseudo-density of each
 region, where fracture may happen, where the third-medium regulariser acts, the supports and the
-displacement-controlled load. The solver builds only what a scene needs: order-1 displacement
-when no regulariser acts, no phase-field unknowns when no region may break, no contact medium
-when no region has density below one.
+loads (:class:`DisplacementLoad`, :class:`DisplacementField`, :class:`Traction`; on boundaries or
+at :class:`Point` vertices), all driven by one load parameter lambda. The solver builds only
+what a scene needs: order-1 displacement when no regulariser acts, no phase-field unknowns when
+no region may break, no contact medium when no region has density below one.
 
 Units: mm, N, MPa. A 2D mesh is plane strain with out-of-plane ``thickness`` (mm); forces and
 energies are reported for that thickness.
