@@ -12,7 +12,7 @@ Model: Ciceri, Aveline, Thillaithevan, Hewson, Santer, "A differentiable variati
 structural self-contact and fracture", Engineering with Computers (2026).
 """
 from .materials import Material
-from .scene import DisplacementLoad, Regulariser, ResolutionWarning, Scene, Support
+from .scene import DisplacementField, DisplacementLoad, Point, Regulariser, ResolutionWarning, Scene, Support, Traction
 from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ChangeControl, Schedule
@@ -20,7 +20,8 @@ from .stepping import AdaptiveStepControl, ChangeControl, Schedule
 __version__ = "0.1.0"
 
 __all__ = [
-    "Material", "Scene", "Support", "DisplacementLoad", "Regulariser", "ResolutionWarning",
+    "Material", "Scene", "Support", "DisplacementLoad", "DisplacementField", "Traction", "Point", "Regulariser",
+    "ResolutionWarning",
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
     "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "ChangeControl", "__version__",
 ]

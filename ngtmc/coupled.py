@@ -59,6 +59,9 @@ class CoupledNewton:
                  gmres_tol: float = 1e-10, gmres_maxsteps: int = 100):
         if solver.alpha is None:
             raise ValueError("CoupledNewton needs a scene with fracture regions (no phase field to couple)")
+        if solver._tractions:
+            raise ValueError("the monolithic scheme does not handle Traction loads (force control); use "
+                             "scheme='single-pass' or 'staggered', or a displacement load")
         if linear_solver not in LINEAR_SOLVERS:
             raise ValueError(f"linear_solver = {linear_solver!r} is not one of {', '.join(map(repr, LINEAR_SOLVERS))} "
                              "(the coupled tangent is not symmetric: no 'sparsecholesky' on the whole matrix)")
@@ -73,6 +76,7 @@ class CoupledNewton:
         self.nu = s.fes_u.ndof
         self.x = ngs.GridFunction(X)
         self._free_base = np.array(list(X.FreeDofs()), dtype=bool)
+        self._free_base[:self.nu] = s._free_np  # vertex conditions live in the solver's mask
         self.form = self._build_form()
         self._r = self.x.vec.CreateVector()
         self._dx = self.x.vec.CreateVector()
@@ -146,7 +150,7 @@ class CoupledNewton:
         self.cap_binding = False
         c = self._ncp_scale
         dir_u = s._dir_np
-        target = np.where(dir_u, load * s._e_np, 0.0)
+        target = s.dirichlet_target(load)
         free_u = ~dir_u & self._free_base[:nu]
         solve_time = assembly_time = 0.0
         r_ref = 0.0

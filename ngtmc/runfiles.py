@@ -25,7 +25,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
+__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
            "jsonable", "parameters_hash", "process_info", "effective_status", "read_metadata",
            "resume_parameters"]
 
@@ -35,7 +35,8 @@ SCHEMA_VERSION = 2
 #: Columns of a Simulation's history, in order, with their units (``history.csv`` has a ``case``
 #: column first). In 2D, force and energies are for the scene thickness: the force of a study run
 #: with thickness 1 mm is in N per mm (``force_unit`` in metadata.json). The one definition used
-#: by :data:`ngtmc.HISTORY_UNITS`, :data:`ngtmc.runner.HISTORY_COLUMNS` and the report.
+#: by :data:`ngtmc.HISTORY_UNITS`, :data:`ngtmc.runner.HISTORY_COLUMNS` and the report. A scene
+#: with several loads or a traction adds columns after these by the rule of :func:`history_units`.
 HISTORY_UNITS = {
     "step": "-",
     "load": "mm",
@@ -55,6 +56,26 @@ HISTORY_UNITS = {
     "solve_time": "s",
     "assembly_time": "s",
 }
+
+
+
+def history_units(loads: dict | None = None) -> dict:
+    """Columns of the history of a scene, with units: :data:`HISTORY_UNITS`, then the columns of
+    its loads by the one rule for extra columns. ``loads``: load name -> kind (class name,
+    "DisplacementLoad", "DisplacementField" or "Traction"), in the scene's order.
+
+    * two or more loads: ``force_<name>`` (N) for every load (``force`` stays the force of
+      ``Scene.force_from``);
+    * every ``Traction`` load: ``displacement_<name>`` (mm), its work-conjugate displacement.
+
+    A scene with one displacement load has exactly :data:`HISTORY_UNITS`."""
+    out = dict(HISTORY_UNITS)
+    loads = dict(loads or {})
+    if len(loads) > 1:
+        out.update({f"force_{n}": "N" for n in loads})
+    out.update({f"displacement_{n}": "mm" for n, kind in loads.items() if kind == "Traction"})
+    return out
+
 
 _UMASK = os.umask(0)
 os.umask(_UMASK)

@@ -2,9 +2,10 @@
 
 A :class:`Scene` names a mesh with regions and boundaries, the material and pseudo-density of each
 region, where fracture may happen, where the third-medium regulariser acts, the supports and the
-displacement-controlled load. The solver builds only what a scene needs: order-1 displacement
-when no regulariser acts, no phase-field unknowns when no region may break, no contact medium
-when no region has density below one.
+loads (:class:`DisplacementLoad`, :class:`DisplacementField`, :class:`Traction`; on boundaries or
+at :class:`Point` vertices), all driven by one load parameter lambda. The solver builds only
+what a scene needs: order-1 displacement when no regulariser acts, no phase-field unknowns when
+no region may break, no contact medium when no region has density below one.
 
 Units: mm, N, MPa. A 2D mesh is plane strain with out-of-plane ``thickness`` (mm); forces and
 energies are reported for that thickness.
@@ -23,7 +24,8 @@ import ngsolve as ngs
 from .materials import Material, check_number
 from .splits import DEFAULT_FORMULATION, DEFAULT_SPLIT, check_split
 
-__all__ = ["Support", "DisplacementLoad", "Regulariser", "Scene", "ResolutionWarning"]
+__all__ = ["Support", "DisplacementLoad", "DisplacementField", "Traction", "Point", "Regulariser", "Scene",
+           "ResolutionWarning"]
 
 _DIRECTIONS = {"x": (0, 1.0), "-x": (0, -1.0), "y": (1, 1.0), "-y": (1, -1.0), "z": (2, 1.0), "-z": (2, -1.0)}
 
@@ -33,13 +35,73 @@ class ResolutionWarning(UserWarning):
 
 
 @dataclass(frozen=True)
-class Support:
-    """Zero displacement of the chosen components on a named boundary.
+class Point:
+    """One vertex of the mesh, where a support or a displacement load may act instead of a boundary.
 
-    boundary: boundary name, or several joined by "|"; x, y, z: which components are held.
+    name: a named point of the geometry (netgen names vertices: in OCC, ``shape.vertices...name =
+    "tip"``; a 2D mesh lists them in ``mesh.GetBBoundaries()``, a 3D mesh in
+    ``mesh.GetBBBoundaries()``); or near: a coordinate (mm, one number per mesh dimension), the
+    vertex nearest to it is taken. Give exactly one of the two.
     """
 
-    boundary: str
+    name: str | None = None
+    near: tuple | None = None
+
+    def __post_init__(self):
+        if (self.name is None) == (self.near is None):
+            raise ValueError(f"Point(name={self.name!r}, near={self.near!r}): give exactly one of name or near")
+        if self.near is not None:
+            try:
+                near = tuple(float(v) for v in self.near)
+            except (TypeError, ValueError):
+                raise ValueError(f"Point near = {self.near!r} must be a coordinate (numbers, mm)") from None
+            if not all(math.isfinite(v) for v in near):
+                raise ValueError(f"Point near = {self.near!r} must be finite")
+            object.__setattr__(self, "near", near)
+
+    @property
+    def label(self) -> str:
+        """Short name used in messages and default load names."""
+        if self.name is not None:
+            return self.name
+        return "point_" + "_".join(f"{v:g}" for v in self.near)
+
+    def __str__(self):
+        return f"Point({self.name!r})" if self.name is not None else f"Point(near={self.near})"
+
+    def vertex(self, mesh: ngs.Mesh) -> int:
+        """Vertex number of this point in ``mesh``; ValueError naming the point if there is none."""
+        d = mesh.dim
+        if self.near is not None:
+            if len(self.near) != d:
+                raise ValueError(f"{self}: the coordinate has {len(self.near)} entries; the mesh is {d}D")
+            pts = np.asarray(mesh.ngmesh.Coordinates())[:, :d]
+            return int(np.argmin(np.linalg.norm(pts - np.asarray(self.near), axis=1)))
+        vb = ngs.BBND if d == 2 else ngs.BBBND
+        names = mesh.GetBBoundaries() if d == 2 else mesh.GetBBBoundaries()
+        for el in mesh.Elements(vb):
+            if el.mat == self.name:
+                return int(el.vertices[0].nr)
+        named = sorted({n for n in names if n and n != "default"})
+        raise ValueError(f"{self}: unknown point name {self.name!r}; the mesh has named points {named}")
+
+
+def _where(b) -> str:
+    return str(b) if isinstance(b, Point) else repr(b)
+
+
+_LETTERS = "xyz"
+
+
+@dataclass(frozen=True)
+class Support:
+    """Zero displacement of the chosen components on a named boundary or at one vertex.
+
+    boundary: boundary name (a regular expression, several joined by "|"), or a :class:`Point`;
+    x, y, z: which components are held.
+    """
+
+    boundary: str | Point
     x: bool = False
     y: bool = False
     z: bool = False
@@ -48,20 +110,28 @@ class Support:
         return [i for i, held in enumerate((self.x, self.y, self.z)) if held]
 
 
+def _default_name(boundary) -> str:
+    label = boundary.label if isinstance(boundary, Point) else str(boundary)
+    return re.sub(r"\W+", "_", label).strip("_") or "load"
+
+
 @dataclass(frozen=True)
 class DisplacementLoad:
-    """Displacement imposed uniformly on a named boundary in a coordinate direction.
+    """Displacement imposed uniformly on a named boundary (or a :class:`Point`) in a coordinate direction.
 
-    boundary: boundary name; direction: one of "x", "-x", "y", "-y", "z", "-z" (the load value,
-    mm, is the displacement along this direction, and the recorded force is the reaction in this
-    direction, positive when it resists the imposed motion); hold_tangential: also hold the other
-    components of that boundary at zero (needed for a rigid indenter floating in a soft void, whose
-    tangential motion is otherwise a near-singular mode).
+    boundary: boundary name or Point; direction: one of "x", "-x", "y", "-y", "z", "-z" (the load
+    value, mm, is the displacement along this direction, and the recorded force is the reaction in
+    this direction, N, positive when it resists the imposed motion); hold_tangential: also hold the
+    other components of that boundary at zero (needed for a rigid indenter floating in a soft void,
+    whose tangential motion is otherwise a near-singular mode); name: label of the load in the
+    history (column ``force_<name>`` when a scene has several loads), default the boundary name.
+    The simple case of :class:`DisplacementField` (field = sign e_direction, one component).
     """
 
-    boundary: str
+    boundary: str | Point
     direction: str = "-y"
     hold_tangential: bool = False
+    name: str | None = None
 
     def __post_init__(self):
         if self.direction not in _DIRECTIONS:
@@ -74,6 +144,151 @@ class DisplacementLoad:
     @property
     def sign(self) -> float:
         return _DIRECTIONS[self.direction][1]
+
+    @property
+    def label(self) -> str:
+        """The load's name in the history (``name``, default from the boundary)."""
+        return self.name if self.name is not None else _default_name(self.boundary)
+
+    def held_components(self, dim: int) -> list[int]:
+        """Components this load prescribes (the loaded one, and the others with hold_tangential)."""
+        return list(range(dim)) if self.hold_tangential else [self.component]
+
+
+@dataclass(frozen=True)
+class DisplacementField:
+    """Displacement prescribed as a field of the position and the load parameter lambda (mm).
+
+    boundary: boundary name (regular expression) or a :class:`Point`.
+    field: either an NGSolve CoefficientFunction of ``ngsolve.x, y(, z)`` with one entry per mesh
+    dimension, the displacement (mm) per unit lambda: u_D = lambda * field; or a Python callable
+    ``f(x, y, lam)`` (2D) / ``f(x, y, z, lam)`` (3D) returning the displacement (mm) as a sequence
+    of one entry per mesh dimension; it is called with numpy arrays of coordinates (mm) and a float
+    lambda and must accept them (use ``np.cos``, not ``math.cos``). A callable may depend on lambda
+    in any way (a rigid rotation by theta = c lambda: ``(R(theta) - I) X``); it is interpolated at
+    the vertices and edge midpoints of the boundary (exact for fields quadratic in the position,
+    an approximation for displacement order 3 and 4). A CoefficientFunction is projected on the
+    boundary at the displacement order.
+    components: which components are prescribed, e.g. "xy", "x" (default every component of the
+    mesh); the others stay free and the field's entries there are ignored.
+    name: label in the history (``force_<name>``), default from the boundary.
+
+    The recorded force of the load is the reaction conjugate to lambda, N: sum over the prescribed
+    dofs of the residual times d u_D / d lambda (for the uniform case, the reaction along the
+    direction).
+    """
+
+    boundary: str | Point
+    field: object
+    components: str | None = None
+    name: str | None = None
+
+    def __post_init__(self):
+        if self.components is not None:
+            c = self.components
+            if not isinstance(c, str) or not c or any(ch not in _LETTERS for ch in c) or len(set(c)) != len(c):
+                raise ValueError(f"DisplacementField on {_where(self.boundary)}: components = {c!r} must be letters "
+                                 "out of 'xyz', each at most once, e.g. 'xy'")
+        if not (isinstance(self.field, ngs.CoefficientFunction) or callable(self.field)):
+            raise TypeError(f"DisplacementField on {_where(self.boundary)}: field must be an ngsolve "
+                            f"CoefficientFunction or a callable (x, y[, z], lam), got {type(self.field).__name__}")
+
+    @property
+    def label(self) -> str:
+        return self.name if self.name is not None else _default_name(self.boundary)
+
+    @property
+    def is_callable(self) -> bool:
+        """True for a Python callable (evaluated at each load), False for a CoefficientFunction."""
+        return not isinstance(self.field, ngs.CoefficientFunction)
+
+    def held_components(self, dim: int) -> list[int]:
+        if self.components is None:
+            return list(range(dim))
+        return sorted(_LETTERS.index(ch) for ch in self.components)
+
+    def values(self, points: np.ndarray, lam: float, dim: int) -> np.ndarray:
+        """Displacement (mm) of the field at ``points`` (n x dim, mm) and load ``lam``, shape (dim, n).
+        ValueError naming the load for a wrong shape or a value that is not finite."""
+        pts = np.asarray(points, dtype=float).reshape(-1, dim)
+        where = f"DisplacementField {self.label!r} on {_where(self.boundary)}"
+        if self.is_callable:
+            try:
+                out = self.field(*[pts[:, i].copy() for i in range(dim)], float(lam))
+            except Exception as e:
+                raise ValueError(f"{where}: calling the field with {dim} coordinate arrays and lam failed ({e})") from e
+            n = len(pts)
+            try:
+                comps = list(out)
+            except TypeError:
+                comps = None
+            if comps is None or len(comps) != dim:
+                shape = np.shape(out) if comps is not None else type(out).__name__
+                raise ValueError(f"{where}: the callable returned {shape}; expected {dim} components "
+                                 f"(a sequence of {dim} numbers or arrays for a {dim}D mesh)")
+            try:
+                out = np.stack([np.broadcast_to(np.asarray(c, dtype=float), (n,)) for c in comps])
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}: each of the {dim} components returned must be a number or an array "
+                                 f"of one value per point ({n} points), got shapes {[np.shape(c) for c in comps]}") from None
+        else:
+            raise TypeError("values() is for callable fields")
+        if not np.all(np.isfinite(out)):
+            bad = int(np.argmax(~np.all(np.isfinite(out), axis=0)))
+            raise ValueError(f"{where}: the field is not finite (NaN or inf) at {tuple(float(v) for v in pts[bad])} mm, lam = {lam:g}")
+        return out
+
+
+@dataclass(frozen=True)
+class Traction:
+    """Prescribed traction (Neumann) on a named boundary, scaled by the load parameter: force control.
+
+    boundary: boundary name (regular expression); traction: the traction vector per unit lambda,
+    MPa (a sequence of one number per mesh dimension, or a vector CoefficientFunction of
+    ``ngsolve.x, y(, z)``), acting on the reference surface (a dead load); name: label in the
+    history, default from the boundary.
+
+    The recorded force of a traction load is the applied force lambda |int t ds| (N, for the scene
+    thickness in 2D) and ``displacement_<name>`` its work-conjugate displacement int t.u ds /
+    |int t ds| (mm; the mean displacement along a uniform traction). With only tractions the
+    schedule's load parameter is this multiplier (the ``load`` column then holds lambda, not a
+    length). Force control cannot pass a limit point: a run stops there with a StepFailure that
+    says so.
+    """
+
+    boundary: str
+    traction: object
+    name: str | None = None
+
+    @property
+    def label(self) -> str:
+        return self.name if self.name is not None else _default_name(self.boundary)
+
+    def held_components(self, dim: int) -> list[int]:
+        return []
+
+    def vector(self, dim: int) -> ngs.CoefficientFunction:
+        """The traction per unit lambda as a CoefficientFunction (MPa); ValueError naming the load if
+        it has the wrong shape or is not finite."""
+        t = self.traction
+        where = f"Traction {self.label!r} on {_where(self.boundary)}"
+        if isinstance(t, ngs.CoefficientFunction):
+            if t.dim != dim:
+                raise ValueError(f"{where}: the traction has {t.dim} components; the mesh is {dim}D")
+            return t
+        try:
+            arr = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{where}: traction = {t!r} must be {dim} numbers (MPa) or a CoefficientFunction") from None
+        if arr.shape != (dim,):
+            raise ValueError(f"{where}: traction has shape {arr.shape}; expected ({dim},) for a {dim}D mesh")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{where}: traction = {t!r} is not finite")
+        return ngs.CF(tuple(float(v) for v in arr))
+
+
+#: The load kinds a scene accepts.
+LOAD_KINDS = (DisplacementLoad, DisplacementField, Traction)
 
 
 @dataclass(frozen=True)
@@ -99,6 +314,25 @@ class Regulariser:
                 raise ValueError(f"Regulariser {name} = {v!r} is outside the allowed range: finite and > 0")
         if self.damping not in ("none", "exp"):
             raise ValueError(f"Regulariser damping = {self.damping!r} is not one of 'none', 'exp'")
+
+
+def _boundary_points(mesh, boundary: str) -> np.ndarray:
+    """Vertices (n x dim, mm) of the boundary elements whose name matches the regex ``boundary``,
+    with the midpoints of their edges."""
+    d = mesh.dim
+    coords = np.asarray(mesh.ngmesh.Coordinates())[:, :d]
+    vs, mids = set(), []
+    for el in mesh.Elements(ngs.BND):
+        if re.fullmatch(boundary, el.mat):
+            nrs = [v.nr for v in el.vertices]
+            vs.update(nrs)
+            for i in range(len(nrs)):
+                for j in range(i + 1, len(nrs)):
+                    mids.append(0.5 * (coords[nrs[i]] + coords[nrs[j]]))
+    out = [coords[sorted(vs)]]
+    if mids:
+        out.append(np.asarray(mids))
+    return np.vstack(out)
 
 
 def _names(spec) -> list[str]:
@@ -128,7 +362,16 @@ class Scene:
         ``{".*": steel, "void": soft}`` are refused. Boundary names of ``Support`` and
         ``DisplacementLoad`` are regular expressions too.
     supports : list of Support
-    load : DisplacementLoad
+        On boundaries or at :class:`Point` vertices.
+    load : a load or a list of loads
+        :class:`DisplacementLoad` (uniform, axis-aligned), :class:`DisplacementField` (a field of the
+        position and lambda, mm), :class:`Traction` (force control, MPa per unit lambda), or a list
+        of them, each on its own boundary or point; the one load parameter lambda of the schedule
+        drives them all. With several loads the history gains a ``force_<name>`` column (N) per load
+        (see :func:`ngtmc.runfiles.history_units`).
+    force_from : str or None
+        Name of the load whose force is the ``force`` column of the history (the force of the
+        report and of the adjoint's reaction objectives); default the first load.
     density : mapping region name -> rho in [0, 1], or array of one rho per element, optional
         Pseudo-density (1 solid, 0 void). Regions not named are solid (rho = 1).
     fracture_regions : region names where the phase field lives (empty: nothing may break)
@@ -179,6 +422,7 @@ class Scene:
     name: str = "scene"
     split: str = DEFAULT_SPLIT
     formulation: str = DEFAULT_FORMULATION
+    force_from: str | None = None
     _checked: bool = field(default=False, repr=False)
 
     def __post_init__(self):
@@ -190,6 +434,29 @@ class Scene:
     @property
     def dim(self) -> int:
         return self.mesh.dim
+
+    @property
+    def loads(self) -> list:
+        """The loads of the scene as a list (``load`` may be one load or a list)."""
+        if isinstance(self.load, (list, tuple)):
+            return list(self.load)
+        return [self.load]
+
+    @property
+    def force_load(self):
+        """The load whose force is the history's ``force`` column (``force_from``, default the first)."""
+        if self.force_from is None:
+            return self.loads[0]
+        for ld in self.loads:
+            if getattr(ld, "label", None) == self.force_from:
+                return ld
+        raise ValueError(f"Scene.force_from = {self.force_from!r} names no load; the loads are "
+                         f"{[getattr(ld, 'label', None) for ld in self.loads]}")
+
+    @property
+    def force_controlled(self) -> bool:
+        """True when every load is a :class:`Traction` (no prescribed displacement moves)."""
+        return all(isinstance(ld, Traction) for ld in self.loads)
 
     @property
     def fracture_region_names(self) -> list[str]:
@@ -288,19 +555,7 @@ class Scene:
                     "(it is identically zero on linear elements); use order=2 or None")
         if self.displacement_order < 1 or self.displacement_order > 4:
             raise ValueError(f"Scene.order = {self.order} is outside the allowed range 1..4")
-        if not self.supports:
-            raise ValueError("Scene.supports is empty: a displacement-controlled scene needs supports")
-        for s in self.supports:
-            need_boundary(s.boundary, "Support")
-            if not s.components():
-                raise ValueError(f"Support on {s.boundary!r} holds no component: set x, y and/or z to True")
-            if mesh.dim == 2 and s.z:
-                raise ValueError(f"Support on {s.boundary!r} holds z, but the mesh is 2D")
-        if not isinstance(self.load, DisplacementLoad):
-            raise TypeError("Scene.load must be a DisplacementLoad")
-        need_boundary(self.load.boundary, "DisplacementLoad")
-        if self.load.component >= mesh.dim:
-            raise ValueError(f"DisplacementLoad direction {self.load.direction!r} does not exist in {mesh.dim}D")
+        self._check_conditions(need_boundary)
         if not (0.0 < float(self.gamma0) < 1.0):
             raise ValueError(f"Scene.gamma0 = {self.gamma0!r} is outside the allowed range (0, 1)")
         for name in ("gc_a", "gc_b") + (("thickness",) if mesh.dim == 2 else ()):
@@ -314,6 +569,101 @@ class Scene:
             self._check_resolution()
         self._checked = True
         return self
+
+    def _check_conditions(self, need_boundary):
+        """Supports and loads: names, shapes, values, and no two conditions on one component."""
+        mesh, d = self.mesh, self.mesh.dim
+        if not self.supports and not any(isinstance(ld, (DisplacementLoad, DisplacementField)) and
+                                         not isinstance(ld.boundary, Point) for ld in self.loads):
+            raise ValueError("Scene.supports is empty: a scene needs supports (or a displacement load on a boundary)")
+        if not self.loads:
+            raise ValueError("Scene.load is empty: give at least one load")
+        verts = {}
+
+        def where(b, what):
+            if isinstance(b, Point):
+                verts[b] = b.vertex(mesh)
+                return ("vertex", verts[b])
+            if not isinstance(b, str):
+                raise TypeError(f"{what}: boundary must be a boundary name or a Point, got {type(b).__name__}")
+            need_boundary(b, what)
+            return ("boundary", b)
+
+        held = {}   # (where, component) -> description of the condition holding it
+
+        def claim(key, c, desc, is_load):
+            k = (key, c)
+            if k in held:
+                other, other_is_load = held[k]
+                if is_load and not other_is_load:
+                    raise ValueError(f"{desc} acts on component {_LETTERS[c]} that {other} already holds: "
+                                     "a load on a held component does nothing; remove one of them")
+                raise ValueError(f"two conditions on component {_LETTERS[c]} of {_where(key[1]) if key[0] == 'boundary' else 'vertex ' + str(key[1])}: "
+                                 f"{other} and {desc}; give each component of a boundary one condition")
+            held[k] = (desc, is_load)
+
+        for s in self.supports:
+            if not isinstance(s, Support):
+                raise TypeError(f"Scene.supports must hold Support objects, got {type(s).__name__}")
+            desc = f"Support on {_where(s.boundary)}"
+            key = where(s.boundary, "Support")
+            if not s.components():
+                raise ValueError(f"{desc} holds no component: set x, y and/or z to True")
+            if d == 2 and s.z:
+                raise ValueError(f"{desc} holds z, but the mesh is 2D")
+            for c in s.components():
+                claim(key, c, desc, False)
+        names = []
+        for ld in self.loads:
+            if not isinstance(ld, LOAD_KINDS):
+                raise TypeError(f"Scene.load must be a DisplacementLoad, DisplacementField or Traction (or a list "
+                                f"of them), got {type(ld).__name__}")
+            kind = type(ld).__name__
+            desc = f"{kind} {ld.label!r} on {_where(ld.boundary)}"
+            if isinstance(ld, Traction) and isinstance(ld.boundary, Point):
+                raise ValueError(f"{desc}: a traction acts on a boundary, not on a Point")
+            key = where(ld.boundary, kind)
+            names.append(ld.label)
+            if isinstance(ld, DisplacementLoad) and ld.component >= d:
+                raise ValueError(f"DisplacementLoad direction {ld.direction!r} does not exist in {d}D")
+            if isinstance(ld, DisplacementField):
+                self._check_field(ld, desc, key)
+            if isinstance(ld, Traction):
+                ld.vector(d)
+                acting = range(d) if isinstance(ld.traction, ngs.CoefficientFunction) else \
+                    [c for c in range(d) if float(np.asarray(ld.traction, dtype=float)[c]) != 0.0]
+                for c in acting:
+                    if (key, c) in held and not held[(key, c)][1]:
+                        raise ValueError(f"{desc} acts on component {_LETTERS[c]} that {held[(key, c)][0]} already "
+                                         "holds: a load on a held component does nothing; remove one of them")
+            for c in ld.held_components(d):
+                if c >= d:
+                    raise ValueError(f"{desc}: component {_LETTERS[c]} does not exist in {d}D")
+                claim(key, c, desc, True)
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"loads {dup} share a name: give each load its own name (name=...), it names its "
+                             "history column force_<name>")
+        self.force_load  # a force_from that names no load raises here
+
+    def _check_field(self, ld, desc, key):
+        """Shape and finiteness of a DisplacementField on its boundary or vertex, before any solve."""
+        mesh, d = self.mesh, self.mesh.dim
+        if key[0] == "vertex":
+            pts = np.asarray(mesh.ngmesh.Coordinates())[[key[1]], :d]
+        else:
+            pts = _boundary_points(mesh, key[1])
+        if ld.is_callable:
+            for lam in (0.0, 1.0):
+                ld.values(pts, lam, d)
+            return
+        if ld.field.dim != d:
+            raise ValueError(f"{desc}: the field has {ld.field.dim} components; the mesh is {d}D (give one entry per "
+                             "dimension; components= selects the prescribed ones)")
+        vals = np.asarray(ld.field(mesh(*[pts[:, i] for i in range(d)]))).reshape(len(pts), d)
+        if not np.all(np.isfinite(vals)):
+            bad = int(np.argmax(~np.all(np.isfinite(vals), axis=1)))
+            raise ValueError(f"{desc}: the field is not finite (NaN or inf) at {tuple(float(v) for v in pts[bad])} mm")
 
     def _check_patterns(self, regions):
         """Each mesh region matched by at most one pattern of ``materials`` and of ``density``; every

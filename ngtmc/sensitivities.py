@@ -13,7 +13,9 @@ What is differentiated (see ``docs/sensitivities.md`` for the derivation): the s
 load step n, with the imposed displacement lambda_n held fixed,
 
 1. alpha_n = P_n(A(H_{n-1})^{-1} f(H_{n-1})), P_n the projection onto [alpha_{n-1}, 1];
-2. R(u_n; alpha_n, rho) = 0 on the free dofs (Dirichlet values lambda_n e, independent of rho);
+2. R(u_n; alpha_n, rho) = 0 on the free dofs (Dirichlet values u_D(lambda_n) of every displacement
+   load, independent of rho; the reaction F_n = <R, d u_D / d lambda> of the force load
+   ``Scene.force_from``). Traction loads are refused by :func:`record_path`;
 3. H_n = max(H_{n-1}, Psi_plus(u_n)) at the history quadrature points.
 
 The energy of (2) and the Psi_plus of (3) are those of the scene's ``split`` and ``formulation``
@@ -62,7 +64,7 @@ import ngsolve as ngs
 
 from . import fracture
 from .materials import deformation_gradient
-from .scene import Scene
+from .scene import Scene, Traction
 from .simulation import Simulation
 from .discretisation import rules
 from .solver import NewtonOptions, Solver
@@ -283,6 +285,10 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
     if options.get("scheme", "single-pass") != "single-pass":
         raise ValueError("record_path: only scheme='single-pass' (the paper's scheme) can be differentiated so far")
+    tractions = [ld.label for ld in scene.loads if isinstance(ld, Traction)]
+    if tractions:
+        raise ValueError(f"record_path: the adjoint does not handle Traction loads (force control) so far: "
+                         f"{tractions}; use displacement loads (DisplacementLoad, DisplacementField)")
     t0 = time.perf_counter()
     sim = Simulation(scene, schedule, control, newton=newton, **options)
     s = sim.solver
@@ -409,8 +415,8 @@ def _step_index(path: Path, step: int) -> int:
 
 
 class ReactionAtStep(Objective):
-    """J = F_n, the reaction on the loaded boundary at recorded step ``step`` (negative counts from
-    the end), N."""
+    """J = F_n, the reaction of the scene's force load (``Scene.force_from``, default the first
+    load; the history's ``force`` column) at recorded step ``step`` (negative counts from the end), N."""
 
     unit = "N"
 
@@ -713,7 +719,6 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
     N = path.n_steps
     t = s.thickness
     free = s._free_np
-    e_np = s._e_np
     g_rho = np.zeros(s.rho.space.ndof)
     g_par = {k: 0.0 for _, k in keys}
     has_a = s.alpha is not None
@@ -761,6 +766,7 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
                 add_scalar(eng.hist_forms, 1.0, abar)
         # ---- (2) displacement equilibrium: reaction seeds and the adjoint solve with K_n
         s.a_u.AssembleLinearization(s.u.vec)
+        e_np = s.reaction_weight(lam=float(path.loads[n]))  # d u_D / d lambda of the force load at lambda_n
         if seeds.force != 0.0:
             Ke = s.a_u.mat.CreateColVector()
             ev = s.a_u.mat.CreateColVector()

@@ -29,7 +29,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from .runfiles import HISTORY_UNITS as _HISTORY_UNITS
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units
 from .scene import Scene
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ChangeControl, Schedule, StepObservation
@@ -176,10 +176,11 @@ class Simulation:
         s = self.solver
         t0 = time.perf_counter()
         en = s.energies()
+        forces = s.reactions(reuse_residual=self.step > 0)
         row = {
             "step": self.step,
             "load": s.load,
-            "force": s.reaction(reuse_residual=self.step > 0),
+            "force": forces[self.scene.force_load.label],
             "fracture_energy": en["fracture_energy"],
             "dissipated_energy": en["dissipated_energy"],
             "elastic_energy": en["elastic_energy"],
@@ -195,14 +196,18 @@ class Simulation:
             "solve_time": info["solve_time"],
             "assembly_time": info["assembly_time"],
         }
+        if len(forces) > 1:
+            row.update({f"force_{n}": f for n, f in forces.items()})
+        row.update({f"displacement_{n}": v for n, v in s.load_displacements().items()})
         self.rows.append(row)
         s.timings["record"] += time.perf_counter() - t0
         return row
 
     @property
     def history(self) -> pd.DataFrame:
-        """Accepted steps so far as a DataFrame (units in :data:`HISTORY_UNITS`)."""
-        return pd.DataFrame(self.rows, columns=list(HISTORY_UNITS))
+        """Accepted steps so far as a DataFrame (units in :attr:`units`: :data:`HISTORY_UNITS` and the
+        columns of the scene's loads, see :func:`ngtmc.runfiles.history_units`)."""
+        return pd.DataFrame(self.rows, columns=list(self.units))
 
     @property
     def finished(self) -> bool:
@@ -385,9 +390,13 @@ class Simulation:
             cutbacks += 1
             smaller = ctrl.failed(t_new - self.t)
             if smaller is None:
-                msg = (f"step from load {self.schedule.load(self.t):.6g} mm failed at the minimum increment "
+                unit = "" if self.scene.force_controlled else " mm"  # lambda scales tractions
+                msg = (f"step from load {self.schedule.load(self.t):.6g}{unit} failed at the minimum increment "
                        f"du_min = {ctrl.du_min:g} mm ({info.get('message', '')}); {len(self.rows)} accepted steps are in "
                        f"the history carried by this exception")
+                peak = self._force_control_peak()
+                if peak:
+                    msg = peak + " " + msg
                 raise StepFailure(msg, self.history, saved)
             du = smaller
         step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new > self.t else 0.0
@@ -410,6 +419,27 @@ class Simulation:
         self._report_progress(row)
         return row
 
+    def _force_control_peak(self) -> str:
+        """Under force control (only Traction loads), a message when the last accepted steps show a
+        falling stiffness d force / d displacement of the force load: the failed step is then past a
+        limit point, which force control cannot pass. Empty string otherwise."""
+        sc = self.scene
+        if not sc.force_controlled or len(self.rows) < 3:
+            return ""
+        name = sc.force_load.label
+        f = np.array([r["force"] for r in self.rows[-3:]])
+        u = np.array([r[f"displacement_{name}"] for r in self.rows[-3:]])
+        du = np.diff(u)
+        if np.any(du == 0.0):
+            return ""
+        k = np.diff(f) / du
+        if not (abs(k[1]) < abs(k[0])):
+            return ""
+        return (f"force control cannot pass a peak: the stiffness of traction {name!r} fell from {k[0]:.4g} to "
+                f"{k[1]:.4g} N/mm over the last steps and no equilibrium was found beyond force {f[-1]:.6g} N "
+                f"(displacement {u[-1]:.6g} mm); the force-displacement curve has a limit point here. Use a "
+                f"displacement load (DisplacementLoad or DisplacementField) to follow the curve past it.")
+
     def _report_progress(self, row):
         if self.progress:
             self._progress.step(self, row)
@@ -430,9 +460,11 @@ class Simulation:
 
     @property
     def units(self) -> dict:
-        """Units of the history columns, the force in this scene's unit (:attr:`force_unit`:
-        ``"N/mm"`` in 2D with thickness 1 mm, else ``"N"``), as in a run folder's metadata."""
-        return dict(HISTORY_UNITS, force=self.force_unit)
+        """History column -> unit for this scene (:func:`ngtmc.runfiles.history_units`), forces in
+        this scene's unit (:attr:`force_unit`: ``"N/mm"`` in 2D with thickness 1 mm, else ``"N"``),
+        as in a run folder's metadata."""
+        units = history_units({ld.label: type(ld).__name__ for ld in self.scene.loads})
+        return {k: (self.force_unit if (k == "force" or k.startswith("force_")) else v) for k, v in units.items()}
 
     # ------------------------------------------------------------------ checkpoints
     def get_state(self) -> dict:

@@ -30,7 +30,7 @@ from . import fracture
 from . import splits
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
 from .discretisation import lower_order_outside, real_compile, rules
-from .scene import Scene, _names
+from .scene import DisplacementField, DisplacementLoad, Point, Scene, Support, Traction, _names
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
 
@@ -119,15 +119,14 @@ class Solver:
 
         # ------------------------------------------------------------ spaces
         dirichlet = [[] for _ in range(d)]
-        for s in scene.supports:
-            for c in s.components():
-                dirichlet[c].append(s.boundary)
-        load = scene.load
-        dirichlet[load.component].append(load.boundary)
-        if load.hold_tangential:
-            for c in range(d):
-                if c != load.component:
-                    dirichlet[c].append(load.boundary)
+        point_held = []   # (vertex, component) held or prescribed at single vertices
+        for cond in list(scene.supports) + [ld for ld in scene.loads if not isinstance(ld, Traction)]:
+            comps = cond.components() if isinstance(cond, Support) else cond.held_components(d)
+            for c in comps:
+                if isinstance(cond.boundary, Point):
+                    point_held.append((cond.boundary.vertex(mesh), c))
+                else:
+                    dirichlet[c].append(cond.boundary)
         kw = {}
         for c, key in zip(range(d), ("dirichletx", "dirichlety", "dirichletz")):
             if dirichlet[c]:
@@ -138,17 +137,25 @@ class Solver:
             lower_order_outside(self.fes_u, mesh, _regex(_names(scene.regulariser.regions)))
         self.u = ngs.GridFunction(self.fes_u, name="displacement")
         self.free = self.fes_u.FreeDofs()
+        if point_held:  # vertex conditions: the free-dof mask is ours, not the space's
+            self.free = ngs.BitArray(self.free)
+            for v, c in point_held:
+                self.free.Clear(self._vertex_dof(v, c))
         self._free_np = np.array(list(self.free), dtype=bool)
         self._dir_np = ~self._free_np
 
         self.rho = ngs.GridFunction(ngs.L2(mesh, order=0), name="density")
         self.rho.vec.FV().NumPy()[:] = scene.element_density()
 
-        # load indicator: 1 (times the direction sign) in the loaded component on the loaded boundary
+        # loads: the Dirichlet values of each displacement load at a given lambda, their reaction
+        # weights d u_D / d lambda, and the external work of the tractions
+        self.load = 0.0
+        self._build_loads()
         self.e_load = ngs.GridFunction(self.fes_u)
-        self.e_load.components[load.component].Set(load.sign, definedon=mesh.Boundaries(load.boundary))
+        self.e_load.vec.FV().NumPy()[:] = self.reaction_weight()
         self._e_np = self.e_load.vec.FV().NumPy().copy()
         self.load = 0.0
+        self._lam_ext = 0.0
 
         # ------------------------------------------------------------ material fields
         regions = mesh.GetMaterials()
@@ -214,6 +221,8 @@ class Solver:
 
         # ------------------------------------------------------------ displacement energy
         self.a_u = self._energy_form(self.fes_u.TrialFunction())
+        if self._tractions:
+            self.a_u = _ExternalWork(self.a_u, self._f_ext, self)
         self._inv = None
         self._a_shift = None
         self._r = self.u.vec.CreateVector()
@@ -356,18 +365,216 @@ class Solver:
     def max_alpha(self) -> float:
         return float(self.alpha.vec.FV().NumPy().max()) if self.alpha is not None else 0.0
 
+    # ================================================================= loads
+    def _vertex_dof(self, v: int, c: int) -> int:
+        """The dof of displacement component ``c`` at vertex ``v``."""
+        return int(self.fes_u.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))[c])
+
+    def _boundary_dofs(self, boundary: str, c: int) -> np.ndarray:
+        """Boolean mask of the dofs of component ``c`` on the boundaries matching ``boundary``."""
+        mask = np.zeros(self.fes_u.ndof, dtype=bool)
+        rng = self.fes_u.Range(c)
+        for el in self.fes_u.Elements(ngs.BND):
+            if re.fullmatch(boundary, el.mat):
+                dofs = np.array([k for k in el.dofs if k >= 0], dtype=int)
+                mask[dofs[(dofs >= rng.start) & (dofs < rng.stop)]] = True
+        return mask
+
+    def _build_loads(self):
+        """Per load: the dofs it prescribes (mask), its unit field (linear loads) and its traction form."""
+        sc, d, mesh = self.scene, self.dim, self.mesh
+        self._loads = []
+        self._tractions = False
+        self._f_ext = None
+        self._aux = None
+        for ld in sc.loads:
+            b = ld.boundary
+            rec = {"load": ld, "name": ld.label, "kind": type(ld).__name__}
+            if isinstance(ld, Traction):
+                self._tractions = True
+                t = ld.vector(d)
+                v = self.fes_u.TestFunction()
+                f = ngs.LinearForm(self.fes_u)
+                f += ngs.InnerProduct(t, v) * ngs.ds(definedon=mesh.Boundaries(b))
+                f.Assemble()
+                rec["f"] = f.vec.FV().NumPy().copy()
+                total = np.array([ngs.Integrate(t[i], mesh, definedon=mesh.Boundaries(b)) for i in range(d)])
+                norm = float(np.linalg.norm(total))
+                if norm == 0.0:  # self-balanced traction: scale by int |t| ds instead
+                    norm = float(ngs.Integrate(ngs.Norm(t), mesh, definedon=mesh.Boundaries(b)))
+                rec["total"] = norm
+                self._loads.append(rec)
+                continue
+            comps = ld.held_components(d)
+            mask = np.zeros(self.fes_u.ndof, dtype=bool)
+            if isinstance(b, Point):
+                vx = b.vertex(mesh)
+                rec["vertex"] = vx
+                for c in comps:
+                    mask[self._vertex_dof(vx, c)] = True
+            else:
+                for c in comps:
+                    mask |= self._boundary_dofs(b, c)
+            rec["mask"] = mask & self._dir_np
+            gf = ngs.GridFunction(self.fes_u)
+            if isinstance(ld, DisplacementLoad):
+                if isinstance(b, Point):
+                    gf.vec.FV().NumPy()[self._vertex_dof(rec["vertex"], ld.component)] = ld.sign
+                else:  # as before fields existed: the direction sign on the loaded component
+                    gf.components[ld.component].Set(ld.sign, definedon=mesh.Boundaries(b))
+                rec["unit"] = gf.vec.FV().NumPy().copy()
+            elif not ld.is_callable:
+                self._set_field(gf, rec, ld.field)
+                rec["unit"] = np.where(rec["mask"], gf.vec.FV().NumPy(), 0.0)
+            else:
+                rec["unit"] = None  # evaluated at each lambda
+            self._loads.append(rec)
+        if self._tractions:
+            self._f_ext = self.u.vec.CreateVector()
+            self._f_ext.FV().NumPy()[:] = sum(r["f"] for r in self._loads if "f" in r)
+
+    def _set_field(self, gf, rec, cf):
+        """Write the vector CF ``cf`` into the prescribed components of ``gf`` on the load's boundary or vertex."""
+        ld, mesh, d = rec["load"], self.mesh, self.dim
+        if "vertex" in rec:
+            x = np.asarray(mesh.ngmesh.Coordinates())[rec["vertex"], :d]
+            val = np.asarray(cf(mesh(*x))).ravel()
+            for c in ld.held_components(d):
+                gf.vec.FV().NumPy()[self._vertex_dof(rec["vertex"], c)] = val[c]
+            return
+        for c in ld.held_components(d):
+            gf.components[c].Set(cf[c], definedon=mesh.Boundaries(ld.boundary))
+
+    def _callable_values(self, rec, lam: float) -> np.ndarray:
+        """Dirichlet values (full dof vector, zero off the load's dofs) of a callable field at ``lam``:
+        interpolated at the boundary's vertices and edge midpoints (order 2), then projected."""
+        ld, mesh, d = rec["load"], self.mesh, self.dim
+        gf = ngs.GridFunction(self.fes_u)
+        if "vertex" in rec:
+            x = np.asarray(mesh.ngmesh.Coordinates())[[rec["vertex"]], :d]
+            val = ld.values(x, lam, d)[:, 0]
+            for c in ld.held_components(d):
+                gf.vec.FV().NumPy()[self._vertex_dof(rec["vertex"], c)] = val[c]
+            return np.where(rec["mask"], gf.vec.FV().NumPy(), 0.0)
+        if "aux" not in rec:
+            rec["aux"] = self._aux_interpolation(ld.boundary)
+        h, vdofs, vpts, edofs, eends, epts, bubble = rec["aux"]
+        fv = ld.values(vpts, lam, d)
+        fe = ld.values(epts, lam, d) if len(epts) else np.zeros((d, 0))
+        aux = ngs.GridFunction(h)
+        a = aux.vec.FV().NumPy()
+        cfs = []
+        for c in range(d):
+            a[:] = 0.0
+            a[vdofs] = fv[c]
+            if len(edofs):
+                a[edofs] = (fe[c] - 0.5 * (a[eends[:, 0]] + a[eends[:, 1]])) / bubble
+            g = ngs.GridFunction(h)
+            g.vec.data = aux.vec
+            cfs.append(g)
+        self._set_field(gf, rec, ngs.CF(tuple(cfs)))
+        return np.where(rec["mask"], gf.vec.FV().NumPy(), 0.0)
+
+    def _aux_interpolation(self, boundary: str):
+        """Order-2 H1 space and the vertex / edge-midpoint data of a boundary for callable fields."""
+        mesh, d = self.mesh, self.dim
+        h = ngs.H1(mesh, order=2)
+        coords = np.asarray(mesh.ngmesh.Coordinates())[:, :d]
+        vs, es = set(), set()
+        for el in mesh.Elements(ngs.BND):
+            if re.fullmatch(boundary, el.mat):
+                vs.update(v.nr for v in el.vertices)
+                es.update(e.nr for e in el.edges)
+        vs, es = sorted(vs), sorted(es)
+        vdofs = np.array([h.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))[0] for v in vs], dtype=int)
+        edofs = np.array([h.GetDofNrs(ngs.NodeId(ngs.EDGE, e))[0] for e in es], dtype=int)
+        ends = np.array([[v.nr for v in mesh.edges[e].vertices] for e in es], dtype=int).reshape(-1, 2)
+        eends = np.array([[h.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))[0] for v in pair] for pair in ends],
+                         dtype=int).reshape(-1, 2)
+        epts = 0.5 * (coords[ends[:, 0]] + coords[ends[:, 1]]) if len(es) else np.zeros((0, d))
+        bubble = 1.0
+        if len(es):  # value of the order-2 edge bubble at its midpoint (-1/8 for NGSolve's basis)
+            g = ngs.GridFunction(h)
+            g.vec.FV().NumPy()[edofs[0]] = 1.0
+            bubble = float(g(mesh(*epts[0])))
+        return h, vdofs, coords[vs], edofs, eends, epts, bubble
+
+    def load_values(self, rec, lam: float) -> np.ndarray:
+        """Dirichlet values (mm) of one displacement load at ``lam``, on its dofs (zero elsewhere)."""
+        if rec["unit"] is not None:
+            return lam * rec["unit"]
+        return self._callable_values(rec, lam)
+
+    def dirichlet_target(self, lam: float) -> np.ndarray:
+        """Values of every Dirichlet dof at load ``lam`` (mm): 0 for supports, each displacement load's
+        field on its dofs (a vertex shared by two loads takes the later load's value)."""
+        target = np.zeros(self.fes_u.ndof)
+        for rec in self._loads:
+            if "mask" not in rec:
+                continue
+            if isinstance(rec["load"], DisplacementLoad):
+                # the uniform load as before fields existed: lambda e on every Dirichlet dof
+                vals = lam * rec["unit"]
+                m = rec["mask"] if len(self._loads) > 1 else self._dir_np
+                target[m] = vals[m]
+            else:
+                m = rec["mask"]
+                target[m] = self.load_values(rec, lam)[m]
+        return target
+
+    def _record_of(self, name: str | None):
+        name = self.scene.force_load.label if name is None else name
+        for rec in self._loads:
+            if rec["name"] == name:
+                return rec
+        raise KeyError(f"no load named {name!r}; the loads are {[r['name'] for r in self._loads]}")
+
+    def reaction_weight(self, name: str | None = None, lam: float | None = None) -> np.ndarray:
+        """d u_D / d lambda of the displacement load ``name`` (default the scene's force load) at load
+        ``lam`` (default the current load), dimensionless: the vector whose product with the residual
+        is that load's reaction. Zero for a traction load."""
+        rec = self._record_of(name)
+        if "mask" not in rec:
+            return np.zeros(self.fes_u.ndof)
+        if rec["unit"] is not None:
+            return rec["unit"]
+        lam = self.load if lam is None else float(lam)
+        dl = 1e-6 * max(1.0, abs(lam))
+        return (self._callable_values(rec, lam + dl) - self._callable_values(rec, lam - dl)) / (2 * dl)
+
     # ================================================================= reaction
     def reaction(self, reuse_residual: bool = False) -> float:
-        """Reaction on the loaded boundary in the load direction, N (for the scene thickness).
+        """Reaction of the force load (``Scene.force_from``, default the first load), N (for the scene
+        thickness): see :meth:`reactions`."""
+        return self.reactions(reuse_residual)[self.scene.force_load.label]
 
-        Computed as <r(u), e> with r the residual of the displacement equation and e the
-        GridFunction equal to the direction sign on the loaded component of the loaded boundary
-        (correct for any order, unlike summing residual entries). Positive when the structure
-        resists the imposed motion. ``reuse_residual=True`` reuses the residual of the last
+    def reactions(self, reuse_residual: bool = False) -> dict:
+        """Force of every load, by name, N (for the scene thickness in 2D).
+
+        A displacement load: <r(u), d u_D / d lambda> with r the residual of the displacement
+        equation (for the uniform load, the GridFunction equal to the direction sign on the loaded
+        component of the loaded boundary; correct for any order, unlike summing residual
+        entries); positive when the structure resists the imposed motion. A traction load: the
+        applied force lambda |int t ds|. ``reuse_residual=True`` reuses the residual of the last
         converged Newton solve (valid only if neither u nor alpha changed since)."""
         if not (reuse_residual and self._r_valid):
+            self._lam_ext = self.load
             self.a_u.Apply(self.u.vec, self._r)
-        return float(ngs.InnerProduct(self._r, self.e_load.vec)) * self.thickness
+        out = {}
+        rN = self._r.FV().NumPy()
+        for rec in self._loads:
+            if "f" in rec:
+                out[rec["name"]] = self.load * rec["total"] * self.thickness
+            elif rec["unit"] is not None and rec is self._record_of(None):
+                out[rec["name"]] = float(ngs.InnerProduct(self._r, self.e_load.vec)) * self.thickness
+            else:
+                out[rec["name"]] = float(np.dot(rN, self.reaction_weight(rec["name"]))) * self.thickness
+        return out
+
+    def load_displacements(self) -> dict:
+        """Work-conjugate displacement of every traction load, by name, mm: int t.u ds / |int t ds|."""
+        uN = self.u.vec.FV().NumPy()
+        return {r["name"]: float(np.dot(r["f"], uN)) / r["total"] for r in self._loads if "f" in r}
 
     # ================================================================= displacement Newton
     def _factorize(self, a):
@@ -410,7 +617,8 @@ class Solver:
         r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
         self._r_valid = False
         uN = u.FV().NumPy()
-        target = np.where(self._dir_np, load * self._e_np, 0.0)
+        target = self.dirichlet_target(load)
+        self._lam_ext = load
         solve_time = 0.0
         assembly_time = 0.0
         shifted = 0
@@ -634,6 +842,30 @@ class Solver:
         return {"u": self.fes_u.ndof, "alpha": self.fes_a.ndof if self.fes_a is not None else 0,
                 "history_points": self.irs.ndof}
 
+
+
+class _ExternalWork:
+    """The energy form minus the work of the tractions, lambda <f, u>, with the form's interface
+    (Apply, Energy, AssembleLinearization, mat). lambda is ``solver._lam_ext``: the load of the
+    Newton solve under way, or the current load for a reaction. The tangent is the form's (dead
+    loads)."""
+
+    def __init__(self, form, f, solver):
+        self.form, self.f, self.solver = form, f, solver
+
+    def Apply(self, x, y):
+        self.form.Apply(x, y)
+        y.data -= self.solver._lam_ext * self.f
+
+    def Energy(self, x) -> float:
+        return self.form.Energy(x) - self.solver._lam_ext * ngs.InnerProduct(self.f, x)
+
+    def AssembleLinearization(self, x):
+        self.form.AssembleLinearization(x)
+
+    @property
+    def mat(self):
+        return self.form.mat
 
 
 class _QuadraticPlus:
