@@ -72,7 +72,7 @@ def _two_loads(**kw):
 def test_two_opposite_loads_give_equal_and_opposite_reactions():
     res = ngtmc.simulate(_two_loads(), 0.005)
     h, units = res.history, res.units
-    assert units["force_left"] == units["force_right"] == "N"
+    assert units["force_left"] == units["force_right"] == units["force"] == "N/mm"  # 2D, thickness 1 mm
     assert list(h.columns)[:len(ngtmc.HISTORY_UNITS)] == list(ngtmc.HISTORY_UNITS)
     assert h["force_right"].iloc[-1] > 0
     # each resists its own motion (+), so along x they are equal and opposite
