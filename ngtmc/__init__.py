@@ -15,7 +15,7 @@ from .materials import Material
 from .scene import DisplacementField, DisplacementLoad, Point, Regulariser, ResolutionWarning, Scene, Support, Traction
 from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate
 from .solver import NewtonOptions, Solver
-from .stepping import AdaptiveStepControl, ChangeControl, Schedule
+from .stepping import AdaptiveStepControl, Schedule
 
 __version__ = "0.1.0"
 
@@ -23,7 +23,7 @@ __all__ = [
     "Material", "Scene", "Support", "DisplacementLoad", "DisplacementField", "Traction", "Point", "Regulariser",
     "ResolutionWarning",
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
-    "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "ChangeControl", "__version__",
+    "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "__version__",
 ]
 
 from .study import Case, list_studies, load_study  # noqa: E402

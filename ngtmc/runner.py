@@ -423,14 +423,14 @@ class _Run:
         is created or any step solved; raise StudyError naming the case and the parameter."""
         import inspect
         from .simulation import Simulation
-        from .stepping import AdaptiveStepControl, ChangeControl, Schedule
+        from .stepping import AdaptiveStepControl, Schedule
         allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
         for case in self.cases:
             if case.name in self.results or case.run is not None:
                 continue
             try:
-                if case.control is not None and not isinstance(case.control, (AdaptiveStepControl, ChangeControl)):
-                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl, an ngtmc.ChangeControl or None, got "
+                if case.control is not None and not isinstance(case.control, AdaptiveStepControl):
+                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl or None, got "
                                     f"{type(case.control).__name__} {case.control!r}")
                 if not isinstance(case.schedule, Schedule):
                     case.schedule = Schedule.monotonic(float(case.schedule))

@@ -32,7 +32,7 @@ import pandas as pd
 from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units
 from .scene import Scene
 from .solver import NewtonOptions, Solver
-from .stepping import AdaptiveStepControl, ChangeControl, Schedule, StepObservation
+from .stepping import AdaptiveStepControl, Schedule, StepObservation
 
 __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "simulate"]
 
@@ -119,11 +119,10 @@ class Simulation:
             from .materials import check_number
             check_number("schedule (a Schedule, or the final load)", schedule, "mm")
             schedule = Schedule.monotonic(float(schedule))
-        if control is not None and not isinstance(control, (AdaptiveStepControl, ChangeControl)):
+        if control is not None and not isinstance(control, AdaptiveStepControl):
             hint = (f"; write AdaptiveStepControl(**{control!r})" if isinstance(control, dict) else "")
-            raise TypeError(f"control must be an ngtmc.AdaptiveStepControl (Eq. 20: du_max mm, k_u 1/N, du_min mm, n_s) "
-                            f"or an ngtmc.ChangeControl (du_max mm, newton_target, ...), or None for constant steps; "
-                            f"got {type(control).__name__}{hint}")
+            raise TypeError(f"control must be an ngtmc.AdaptiveStepControl (du_max mm, k_u 1/N, du_min mm, n_s), "
+                            f"or None for constant steps; got {type(control).__name__}{hint}")
         if control is None:
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
         if scheme not in SCHEMES:

@@ -14,13 +14,8 @@ with W_f of Eq. 19 per unit thickness (N mm / mm = N), k_u in 1/N, a floor du_mi
 that halves on a failed step (down to du_min) and doubles back towards 1 after ``n_s`` successful
 steps in a row.
 
-:class:`ChangeControl` chooses the next increment from what the last step cost (its Newton
-iterations, every staggered pass counted) and, optionally, how much the phase field changed. It
-is meant for schemes that converge each step: unlike Eq. 20 it does not shrink the steps where W_f
-grows steadily (the post-failure tail).
-
-Both rules take the same :class:`StepObservation` of the last accepted step through
-``next_increment``; the simulation builds it.
+A step rule reads the :class:`StepObservation` of the last accepted step through
+``next_increment``; the simulation builds it (a rule needs no other access to the run).
 """
 from __future__ import annotations
 
@@ -30,7 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["Schedule", "AdaptiveStepControl", "ChangeControl", "StepObservation", "STEP_RULES"]
+__all__ = ["Schedule", "AdaptiveStepControl", "StepObservation"]
 
 
 class Schedule:
@@ -175,93 +170,3 @@ class AdaptiveStepControl:
     def set_state(self, state: dict):
         self.scale = float(state["scale"])
         self.successes = int(state["successes"])
-
-
-@dataclass
-class ChangeControl:
-    """Step size from the cost and the change of the solution over the last accepted step.
-
-    After a step of size du (mm) that took n Newton iterations in all (every staggered pass
-    counted) and changed the phase field by at most dalpha at a dof, the next increment is
-
-        du_next = min(attempted * min(growth, newton_target / n),  du * dalpha_target / dalpha)
-
-    clipped to [du_min, du_max]. The first term lets the step grow by at most ``growth`` per step
-    while a step costs fewer than ``newton_target`` iterations and shrinks it when it costs more;
-    the second (off unless ``dalpha_target`` is given) bounds the phase-field change per step. A
-    failed step is retried with half the increment. The rule holds no run state: everything it
-    needs is in the observation of the last step.
-
-    Meant for schemes that converge each step (``scheme="staggered"`` or ``"monolithic"``): there
-    the step size sets only how finely the path is sampled and how hard a step is, so the rule
-    does not shrink the steps where W_f grows steadily (the post-failure tail), and it may exceed
-    the paper's du_max where nothing changes (crossing a gap). With the single-pass scheme the
-    error grows with the step (damage lags one step), and the lag does not show in any change the
-    rule could observe: a large step simply delays the crack (``docs/performance.md``).
-
-    Parameters
-    ----------
-    du_max : float
-        Largest load increment, mm (> 0).
-    newton_target : int
-        Newton iterations per step (all passes) above which the step shrinks (>= 1).
-    growth : float
-        Largest growth factor from one step to the next (> 1).
-    dalpha_target : float, optional
-        Bound on the largest phase-field change per step, dimensionless, in (0, 1]; None: no bound.
-    du_min : float
-        Smallest increment, mm (> 0, <= du_max); a failing step at du_min ends the run.
-    du_first : float, optional
-        First increment, mm (default du_max / 4).
-    """
-
-    du_max: float
-    newton_target: int = 8
-    growth: float = 2.0
-    dalpha_target: float | None = None
-    du_min: float = 1e-8
-    du_first: float | None = None
-
-    def __post_init__(self):
-        if not (math.isfinite(self.du_max) and self.du_max > 0):
-            raise ValueError(f"du_max = {self.du_max!r} mm is outside the allowed range: > 0")
-        if int(self.newton_target) < 1:
-            raise ValueError(f"newton_target = {self.newton_target!r} is outside the allowed range: >= 1")
-        if not (math.isfinite(self.growth) and self.growth > 1):
-            raise ValueError(f"growth = {self.growth!r} is outside the allowed range: > 1")
-        if self.dalpha_target is not None and not (math.isfinite(self.dalpha_target) and 0 < self.dalpha_target <= 1):
-            raise ValueError(f"dalpha_target = {self.dalpha_target!r} is outside the allowed range (0, 1] (or None)")
-        if not (math.isfinite(self.du_min) and 0 < self.du_min <= self.du_max):
-            raise ValueError(f"du_min = {self.du_min!r} mm is outside the allowed range (0, du_max = {self.du_max}]")
-        if self.du_first is not None and not (math.isfinite(self.du_first) and self.du_min <= self.du_first <= self.du_max):
-            raise ValueError(f"du_first = {self.du_first!r} mm is outside the allowed range [du_min, du_max]")
-
-    def next_increment(self, last: StepObservation | None) -> float:
-        """Increment (mm) for the next step after the accepted step ``last`` (None before the first)."""
-        if last is None or last.attempted <= 0.0:
-            du = self.du_max / 4.0 if self.du_first is None else self.du_first
-        else:
-            du = last.attempted * min(self.growth, self.newton_target / max(int(last.newton_iterations), 1))
-            if self.dalpha_target is not None and last.dalpha_max > 0.0:
-                du = min(du, last.step_size * self.dalpha_target / last.dalpha_max)
-        return min(max(du, self.du_min), self.du_max)
-
-    def accepted(self):
-        """Nothing to record: the rule reads the last step's observation."""
-
-    def failed(self, attempted: float) -> float | None:
-        """Half of the failed increment ``attempted`` (mm), or None below du_min (the run cannot go on)."""
-        smaller = attempted / 2.0
-        if smaller < self.du_min * (1 - 1e-12):
-            return None
-        return smaller
-
-    def state(self) -> dict:
-        return {}
-
-    def set_state(self, state: dict):
-        pass
-
-
-#: Step rules by name (study parameter ``step_rule``).
-STEP_RULES = {"eq20": AdaptiveStepControl, "change": ChangeControl}
