@@ -97,6 +97,13 @@ constant load: that tail is most of the steps (about 350 of the quick run's), an
 growing after the drop, so the steps stay at 1e-5..1e-4 mm all the way to 0.15 mm, where the
 residual force is 2.05 N/mm (quick).
 
+**The lag of the single-pass scheme raises the peak by 3.5 %.** With the same mesh and step rule
+and every step converged (``--set scheme=staggered``, passes until alpha changes by less than
+1e-3), the quick peak is 37.45 N/mm at 0.0948 mm (-10.8 % from Ambati), against 38.76 N/mm
+single-pass, and the force in the tail is 5-28 % lower (9.52 against 12.20 N/mm at 0.100 mm).
+The converged run costs 4.3x the Newton iterations (7159 against 1680), so the default stays
+single-pass; ``docs/performance.md`` has the numbers.
+
 Earlier runs failed in that tail (quick at 0.148 mm, medium at 0.0990 mm): Newton stalled at every
 step size down to du_min. The cause was the quadrature of the order-2 elastic energy: NGSolve's
 default rule (3 edge midpoints per triangle) let a void element under the indenter fold towards
