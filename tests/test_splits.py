@@ -139,12 +139,12 @@ def test_scene_validates_split_and_formulation_names():
 
 
 def test_two_dimensional_splits_are_refused_in_3d():
-    from netgen.occ import Box, OCCGeometry, Pnt
+    from netgen.occ import X, Box, OCCGeometry, Pnt
     box = Box(Pnt(0, 0, 0), Pnt(1, 1, 1))
+    box.faces.Min(X).name, box.faces.Max(X).name = "left", "right"
     mesh = ngs.Mesh(OCCGeometry(box).GenerateMesh(maxh=1.0))
-    bnd = mesh.GetBoundaries()[0]
-    sc = ngtmc.Scene(mesh, {".*": ngtmc.Material(1000.0, 0.3)}, [ngtmc.Support(bnd, x=True, y=True, z=True)],
-                     ngtmc.DisplacementLoad(mesh.GetBoundaries()[1], "x"), split="spectral")
+    sc = ngtmc.Scene(mesh, {".*": ngtmc.Material(1000.0, 0.3)}, [ngtmc.Support("left", x=True, y=True, z=True)],
+                     ngtmc.DisplacementLoad("right", "x"), split="spectral")
     with pytest.raises(ValueError, match="2D plane strain only; in 3D use one of 'vol-dev-J', 'vol-dev-small', 'none'"):
         sc.check()
 
