@@ -747,6 +747,28 @@ def _render(out: Path, strict: bool):
 
 
 # ====================================================================== a user's own scene
+def _value_text(v) -> str:
+    """A reproducible text for a field or traction: a callable by its qualified name, a
+    CoefficientFunction by its expression, a vector by its numbers (no memory addresses)."""
+    if callable(v) and hasattr(v, "__qualname__"):
+        return f"{getattr(v, '__module__', '')}.{v.__qualname__}"
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return str([float(x) for x in np.ravel(v)])
+    return " ".join(str(v).split())
+
+
+def _load_text(ld) -> str:
+    """One load of a scene as recorded in a user scene's parameters."""
+    text = f"{type(ld).__name__} {ld.label!r} on {ld.boundary}"
+    if hasattr(ld, "direction"):
+        text += f": {ld.direction}" + (", tangential held" if ld.hold_tangential else "")
+    if hasattr(ld, "field"):
+        text += f": components {ld.components or 'all'}, field {_value_text(ld.field)}"
+    if hasattr(ld, "traction"):
+        text += f": traction {_value_text(ld.traction)} MPa per unit lambda"
+    return text
+
+
 def _scene_parameters(scene, schedule, control, options: dict) -> dict:
     """PARAMETERS (name -> (value, unit, description)) describing a scene, its schedule, step control
     and options: what the run folder records, and what a resume compares."""
@@ -792,9 +814,9 @@ def _scene_parameters(scene, schedule, control, options: dict) -> dict:
                    f"{hashlib.sha256(coords.tobytes()).hexdigest()[:16]}", "-", "the mesh (vertex coordinates hashed)")
     out["supports"] = ("; ".join(f"{s.boundary}: " + "".join(a for a in "xyz" if getattr(s, a, False))
                                  for s in scene.supports), "-", "held boundaries and components")
-    out["load"] = (f"{scene.load.boundary}: {scene.load.direction}"
-                   + (", tangential held" if scene.load.hold_tangential else ""), "-",
-                   "loaded boundary and direction")
+    out["load"] = ("; ".join(_load_text(ld) for ld in scene.loads), "-", "loads: kind, name, where, what")
+    if len(scene.loads) > 1:
+        out["force_from"] = (str(scene.force_load.label), "-", "load behind the force column")
     out["schedule"] = ([float(x) for x in schedule.points], "mm", "load schedule (turning points)")
     if control is not None:
         for a in _CONTROL_SETTINGS:
@@ -865,9 +887,9 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
                    checkpoint_seconds, vtk, callbacks)
     sim = run.simulations.get("main")
     rows = run.rows.get("main") or []
-    history = pd.DataFrame(rows).reindex(columns=list(HISTORY_UNITS))
     units = sim.units if sim is not None else dict(HISTORY_UNITS, force=run.force_unit or
                                                    (read_metadata(run.out) or {}).get("force_unit", "N"))
+    history = pd.DataFrame(rows).reindex(columns=list(units))
     return SimulationResult(history, units, sim.solver if sim is not None else None,
                             float(run.results.get("main", {}).get("wall_time_s") or run.wall_time()),
                             run_dir=run.out)

@@ -222,3 +222,28 @@ def test_readme_loads_example_runs():
     h = namespace["history"]
     assert h["load"].iloc[-1] == pytest.approx(1.0)
     assert np.max(np.abs(h["force"])) < 1e-9 and np.max(np.abs(h["elastic_energy"])) < 1e-12
+
+
+def test_several_loads_and_a_field_get_a_run_folder(tmp_path):
+    """A user scene with two loads and a scene with a displacement field go through
+    ``simulate(out_dir=)``: the folder's history keeps the per-load columns, and the recorded
+    parameters describe every load without memory addresses (so a resume can compare them)."""
+    import json
+    import pandas as pd
+    res = ngtmc.simulate(_two_loads(force_from="right"), 0.005, out_dir=tmp_path / "two")
+    h = pd.read_csv(tmp_path / "two" / "history.csv")
+    assert np.allclose(h["force_left"], res.history["force_left"], rtol=1e-12)
+    assert np.array_equal(h["force"], h["force_right"])
+    meta = json.loads((tmp_path / "two" / "metadata.json").read_text())
+    text = json.dumps(meta)
+    assert "DisplacementLoad 'left' on left: -x" in text and "DisplacementLoad 'right' on right: x" in text
+
+    def shear(x, y, lam):
+        return (lam * y, 0.0 * x)
+
+    sc = ngtmc.Scene(bar_mesh(), MAT, supports=[ngtmc.Support("left", x=True, y=True)],
+                     load=ngtmc.DisplacementField("right", shear, components="x"))
+    ngtmc.simulate(sc, 0.005, out_dir=tmp_path / "field")
+    text = (tmp_path / "field" / "metadata.json").read_text()
+    assert "shear" in text and "0x" not in text
+    assert (tmp_path / "field" / "report.html").stat().st_size > 0
