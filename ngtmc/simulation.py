@@ -32,7 +32,7 @@ import pandas as pd
 from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units
 from .scene import Scene
 from .solver import NewtonOptions, Solver
-from .stepping import AdaptiveStepControl, Schedule, StepObservation
+from .stepping import AdaptiveStepControl, ControlState, Schedule, StepObservation
 
 __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "simulate"]
 
@@ -155,6 +155,8 @@ class Simulation:
         self.rows: list[dict] = []
         self.last_delta_wf = 0.0
         self.last_step: StepObservation | None = None
+        #: run state of the step control (scale, successes); the control itself holds none
+        self.control_state: ControlState = control.initial_state()
         self._wf_prev = 0.0
         self._elapsed_before = 0.0
         self._t_start = None
@@ -371,7 +373,7 @@ class Simulation:
         s = self.solver
         ctrl = self.control
         t_turn = self.schedule.next_turning_time(self.t)
-        du = ctrl.next_increment(self.last_step)
+        du = ctrl.next_increment(self.last_step, self.control_state)
         saved = s.get_state()
         cutbacks = 0
         totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
@@ -387,7 +389,7 @@ class Simulation:
                 break
             s.set_state(saved)
             cutbacks += 1
-            smaller = ctrl.failed(t_new - self.t)
+            self.control_state, smaller = ctrl.failed(self.control_state, t_new - self.t)
             if smaller is None:
                 unit = "" if self.scene.force_controlled else " mm"  # lambda scales tractions
                 msg = (f"step from load {self.schedule.load(self.t):.6g}{unit} failed at the minimum increment "
@@ -403,7 +405,7 @@ class Simulation:
             s.update_history(info["H_trial"])
         self.t = t_new
         self.step += 1
-        ctrl.accepted()
+        self.control_state = ctrl.accepted(self.control_state)
         row = self._record(step_size=step_size, staggered_iterations=info["staggered_iterations"], cutbacks=cutbacks,
                            projected=info["projected"], **totals)
         wf = s.fracture_energy_per_thickness()
@@ -469,7 +471,7 @@ class Simulation:
     def get_state(self) -> dict:
         """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows."""
         return {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
-                "control": self.control.state(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
+                "control": self.control_state.as_dict(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
                 "last_step": None if self.last_step is None else dataclasses.asdict(self.last_step),
                 "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows]}
 
@@ -478,7 +480,7 @@ class Simulation:
         self.solver.set_state(st["solver"])
         self.t = float(st["t"])
         self.step = int(st["step"])
-        self.control.set_state(st["control"])
+        self.control_state = ControlState.from_dict(st["control"])
         self.last_delta_wf = float(st["last_delta_wf"])
         last = st.get("last_step")
         if last is not None:

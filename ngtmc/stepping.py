@@ -14,18 +14,19 @@ with W_f of Eq. 19 per unit thickness (N mm / mm = N), k_u in 1/N, a floor du_mi
 that halves on a failed step (down to du_min) and doubles back towards 1 after ``n_s`` successful
 steps in a row.
 
-A step rule reads the :class:`StepObservation` of the last accepted step through
-``next_increment``; the simulation builds it (a rule needs no other access to the run).
+A step rule reads the :class:`StepObservation` of the last accepted step and its
+:class:`ControlState` through ``next_increment``; the simulation builds and keeps both (a rule
+needs no other access to the run, and keeps no run state itself).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 import math
 from typing import Sequence
 
 import numpy as np
 
-__all__ = ["Schedule", "AdaptiveStepControl", "StepObservation"]
+__all__ = ["Schedule", "AdaptiveStepControl", "ControlState", "StepObservation"]
 
 
 class Schedule:
@@ -100,9 +101,31 @@ class StepObservation:
     cutbacks: int = 0
 
 
-@dataclass
+@dataclass(frozen=True)
+class ControlState:
+    """Run state of :class:`AdaptiveStepControl`: the scale s of Eq. 20 (dimensionless, in
+    (0, 1]) and the successful steps in a row since it last changed. A simulation owns it (and
+    checkpoints it); the control is a settings object and keeps none."""
+
+    scale: float = 1.0
+    successes: int = 0
+
+    def as_dict(self) -> dict:
+        return {"scale": self.scale, "successes": self.successes}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ControlState":
+        return cls(scale=float(d["scale"]), successes=int(d["successes"]))
+
+
+@dataclass(frozen=True)
 class AdaptiveStepControl:
     """Step-size rule of Eq. 20 with halving on failure and doubling after successes.
+
+    A settings object: it holds no run state, so one control may serve any number of simulations.
+    The scale and the count of successes live in a :class:`ControlState` that the caller (the
+    :class:`ngtmc.Simulation`) keeps and passes in; :meth:`accepted` and :meth:`failed` return the
+    new state.
 
     Parameters
     ----------
@@ -122,8 +145,6 @@ class AdaptiveStepControl:
     k_u: float = 0.0
     du_min: float = 1e-8
     n_s: int = 5
-    scale: float = field(default=1.0)
-    successes: int = field(default=0)
 
     def __post_init__(self):
         from .materials import check_number
@@ -138,35 +159,35 @@ class AdaptiveStepControl:
         if int(self.n_s) < 1:
             raise ValueError(f"n_s = {self.n_s!r} is outside the allowed range: >= 1")
 
-    def proposal(self, delta_wf: float) -> float:
-        """Increment (mm) after an accepted step that raised W_f by ``delta_wf`` (N, per unit thickness)."""
-        du = self.scale * self.du_max * math.exp(-self.k_u * max(float(delta_wf), 0.0))
+    @staticmethod
+    def initial_state() -> ControlState:
+        """The state a run starts from: scale 1, no successes."""
+        return ControlState()
+
+    def proposal(self, delta_wf: float, state: ControlState = ControlState()) -> float:
+        """Increment (mm) after an accepted step that raised W_f by ``delta_wf`` (N, per unit
+        thickness), at the scale of ``state``."""
+        du = state.scale * self.du_max * math.exp(-self.k_u * max(float(delta_wf), 0.0))
         return max(du, self.du_min)
 
-    def next_increment(self, last: StepObservation | None) -> float:
-        """Increment (mm) for the next step: Eq. 20 on ``last.delta_wf`` (du_max before the first step)."""
-        return self.proposal(0.0 if last is None else last.delta_wf)
+    def next_increment(self, last: StepObservation | None, state: ControlState = ControlState()) -> float:
+        """Increment (mm) for the next step: Eq. 20 on ``last.delta_wf`` (du_max before the first
+        step), at the scale of ``state``."""
+        return self.proposal(0.0 if last is None else last.delta_wf, state)
 
-    def accepted(self):
-        """Record a successful step; doubles the scale (up to 1) after n_s successes in a row."""
-        self.successes += 1
-        if self.successes >= self.n_s and self.scale < 1.0:
-            self.scale = min(1.0, 2.0 * self.scale)
-            self.successes = 0
+    def accepted(self, state: ControlState) -> ControlState:
+        """The state after a successful step: the scale doubles (up to 1) after n_s successes in a row."""
+        successes = state.successes + 1
+        if successes >= self.n_s and state.scale < 1.0:
+            return ControlState(scale=min(1.0, 2.0 * state.scale), successes=0)
+        return ControlState(scale=state.scale, successes=successes)
 
-    def failed(self, attempted: float) -> float | None:
-        """Record a failed attempt of size ``attempted`` (mm); return the halved size, or None when it
-        would fall below du_min (the run cannot go on)."""
-        self.successes = 0
-        self.scale = max(self.scale / 2.0, 1e-300)
+    def failed(self, state: ControlState, attempted: float) -> tuple[ControlState, float | None]:
+        """The state after a failed attempt of size ``attempted`` (mm) (scale halved, successes
+        reset), and the halved size to try next, or None when it would fall below du_min (the run
+        cannot go on)."""
+        new = ControlState(scale=max(state.scale / 2.0, 1e-300), successes=0)
         smaller = attempted / 2.0
         if smaller < self.du_min * (1 - 1e-12):
-            return None
-        return smaller
-
-    def state(self) -> dict:
-        return {"scale": self.scale, "successes": self.successes}
-
-    def set_state(self, state: dict):
-        self.scale = float(state["scale"])
-        self.successes = int(state["successes"])
+            return new, None
+        return new, smaller
