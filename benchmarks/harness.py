@@ -7,7 +7,8 @@ when it is 1 mm), times in s (``*_s``) or ms (``*_ms``), errors in % (``*_pct``)
 * :func:`compare` compares a force-load curve with a reference curve;
 * :func:`format_table` renders records as a fixed-width or markdown table.
 
-Everything except :func:`run_variant` is pure (numpy/pandas only) and imports no NGSolve.
+Everything except :func:`run_variant` is pure (numpy/pandas, and the one definition of the peak
+of a force-load curve, :func:`ngtmc.runfiles.peak`) and solves nothing.
 """
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ import time
 
 import numpy as np
 import pandas as pd
+
+from ngtmc.runfiles import peak, peak_index
 
 __all__ = ["parse_value", "parse_assignments", "merge_options", "pseudo_time", "downsample", "summarise",
            "compare", "timing_split", "table_rows", "format_table", "jsonable", "run_variant", "TABLE_COLUMNS"]
@@ -79,8 +82,8 @@ def downsample(load, force, n: int = MAX_CURVE_POINTS) -> tuple[list, list]:
     if m <= n:
         return x.tolist(), y.tolist()
     fixed = {0, m - 1}
-    if np.any(np.isfinite(y)):
-        fixed.add(int(np.nanargmax(y)))
+    if peak_index(y) is not None:
+        fixed.add(peak_index(y))
     nz = np.flatnonzero(np.diff(x) != 0)
     sd = np.sign(np.diff(x)[nz])
     fixed.update(int(i) for i in nz[:-1][sd[1:] != sd[:-1]] + 1)
@@ -103,9 +106,7 @@ def summarise(history: pd.DataFrame) -> dict:
         if col in history:
             out[col] = int(pd.to_numeric(history[col], errors="coerce").fillna(0).sum())
     f = history["force"].to_numpy(dtype=float)
-    if np.any(np.isfinite(f)):
-        i = int(np.nanargmax(f))
-        out["peak_force_N"], out["peak_load_mm"] = float(f[i]), float(history["load"].iloc[i])
+    out["peak_force_N"], out["peak_load_mm"] = peak(f, history["load"])
     out["final_load_mm"] = float(history["load"].iloc[-1])
     out["final_force_N"] = float(f[-1])
     for col in history.columns:
@@ -131,9 +132,9 @@ def compare(load, force, ref_load, ref_force) -> dict:
     xr, yr = np.asarray(ref_load, dtype=float), np.asarray(ref_force, dtype=float)
     out = {"peak_force_error_pct": None, "peak_load_error_pct": None, "max_force_diff_N": None,
            "max_force_diff_load_mm": None, "max_force_diff_pct_of_peak": None, "common_range_mm": None}
-    if x.size == 0 or xr.size == 0 or not np.any(np.isfinite(y)) or not np.any(np.isfinite(yr)):
+    i, ir = peak_index(y), peak_index(yr)
+    if x.size == 0 or xr.size == 0 or i is None or ir is None:
         return out
-    i, ir = int(np.nanargmax(y)), int(np.nanargmax(yr))
     out["peak_force_error_pct"] = _pct(y[i], yr[ir])
     out["peak_load_error_pct"] = _pct(x[i], xr[ir])
     t, tr = pseudo_time(x), pseudo_time(xr)

@@ -26,7 +26,7 @@ import warnings
 import numpy as np
 
 __all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
-           "jsonable", "parameters_hash", "process_info", "effective_status", "read_metadata",
+           "jsonable", "peak", "peak_index", "parameters_hash", "process_info", "effective_status", "read_metadata",
            "resume_parameters"]
 
 #: Version of the run-folder format (``schema_version`` in metadata.json; absent means 1).
@@ -75,6 +75,32 @@ def history_units(loads: dict | None = None) -> dict:
         out.update({f"force_{n}": "N" for n in loads})
     out.update({f"displacement_{n}": "mm" for n, kind in loads.items() if kind == "Traction"})
     return out
+
+
+def peak_index(force) -> int | None:
+    """Row of the peak of a force column: the largest finite force (the first row where it occurs
+    when it occurs more than once; NaN and infinite forces are skipped), or None when no force is
+    finite. The one definition of "the peak" in ngtmc: the runner's results, the report, the
+    benchmarks and :class:`ngtmc.SimulationResult` use it (through :func:`peak`)."""
+    f = np.asarray(force, dtype=float).ravel()
+    finite = np.isfinite(f)
+    if not finite.any():
+        return None
+    return int(np.argmax(np.where(finite, f, -np.inf)))
+
+
+def peak(force, load) -> tuple[float, float] | tuple[None, None]:
+    """The peak of a force-load curve: ``(peak force, load at it)`` as floats, in the units of the
+    inputs (force unit, mm), at the row of :func:`peak_index`; ``(None, None)`` when no force is
+    finite. ``force`` and ``load`` have one value per row (equal lengths)."""
+    f = np.asarray(force, dtype=float).ravel()
+    x = np.asarray(load, dtype=float).ravel()
+    if f.size != x.size:
+        raise ValueError(f"peak: {f.size} forces but {x.size} loads; give one load per force")
+    i = peak_index(f)
+    if i is None:
+        return None, None
+    return float(f[i]), float(x[i])
 
 
 _UMASK = os.umask(0)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import math
 import os
 from pathlib import Path
 import platform
@@ -43,7 +44,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, CheckpointStore, effective_status, jsonable,
+from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, CheckpointStore, effective_status, jsonable, peak,
                        parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
                        write_atomic, write_json, write_npz)
 from .plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput, force_unit
@@ -136,9 +137,8 @@ def case_results(rows: pd.DataFrame) -> dict:
     """Key numbers of one case's history: peak force and its load, steps, Newton iterations, times."""
     if rows is None or len(rows) == 0:
         return {"peak_force": None, "peak_load": None, "steps": 0}
-    f = rows["force"].to_numpy(dtype=float)
-    i = int(np.nanargmax(f)) if np.any(np.isfinite(f)) else 0
-    out = {"peak_force": float(f[i]), "peak_load": float(rows["load"].iloc[i]),
+    pf, pl = peak(rows["force"], rows["load"])
+    out = {"peak_force": math.nan if pf is None else pf, "peak_load": math.nan if pl is None else pl,
            "steps": int(rows["step"].max()) if "step" in rows else len(rows) - 1,
            "final_load": float(rows["load"].iloc[-1])}
     for col, key in (("newton_iterations", "newton_iterations"), ("cutbacks", "cutbacks")):

@@ -29,7 +29,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak
 from .scene import Scene
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ControlState, Schedule, StepObservation
@@ -68,13 +68,17 @@ class SimulationResult:
 
     @property
     def peak_force(self) -> float:
-        """Largest recorded force, in ``units["force"]`` (N, or N/mm in 2D with thickness 1 mm)."""
-        return float(self.history["force"].max())
+        """Largest recorded force (:func:`ngtmc.runfiles.peak`), in ``units["force"]`` (N, or N/mm in
+        2D with thickness 1 mm); NaN when no force is finite."""
+        f, _ = peak(self.history["force"], self.history["load"])
+        return math.nan if f is None else f
 
     @property
     def peak_load(self) -> float:
-        """Applied displacement at the largest force, mm."""
-        return float(self.history["load"].iloc[int(self.history["force"].to_numpy().argmax())])
+        """Applied displacement at the largest force (:func:`ngtmc.runfiles.peak`), mm; NaN when no
+        force is finite."""
+        _, x = peak(self.history["force"], self.history["load"])
+        return math.nan if x is None else x
 
 
 class Simulation:

@@ -108,6 +108,7 @@ from functools import partial
 import numpy as np
 
 import ngtmc
+from ngtmc.runfiles import peak_index
 from ngtmc.study import SOLVER_PARAMETERS, Case, simulation_options
 
 NAME = "l_panel"
@@ -352,7 +353,7 @@ def phases(hist, p: dict, settle: float = 0.25) -> dict:
     first = h.iloc[: i1 + 1]
     unload = h.iloc[i1: i2 + 1]
     reload = h.iloc[i2:]
-    j = int(first["force"].to_numpy().argmax())
+    j = peak_index(first["force"]) or 0  # the peak of ngtmc (largest finite force), row 0 if none
     gap = effective_gap(p)
     u_settle = u1 - settle * abs(u1 - u2)
     settled = unload[unload["load"] <= u_settle + 1e-12]
@@ -372,7 +373,7 @@ def phases(hist, p: dict, settle: float = 0.25) -> dict:
         "completed": bool(np.isclose(load[-1], u3)),
     }
     if len(reload) > 1:
-        k = int(reload["force"].to_numpy().argmax())
+        k = peak_index(reload["force"]) or 0
         out.update({"reload_peak_force": float(reload["force"].iloc[k]), "reload_peak_load": float(reload["load"].iloc[k]),
                     "final_force": float(reload["force"].iloc[-1]),
                     "wf_final": float(reload["fracture_energy"].iloc[-1])})

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..runfiles import peak
 from .loading import _case_list, _case_rows, _param_value
 
 
@@ -208,11 +209,9 @@ def case_numbers(meta: dict, history: pd.DataFrame, case: str) -> dict:
     res = (meta.get("results") or {}).get(case) or {}
     h = _case_rows(history, case)
     out: dict[str, Any] = {"case": case}
-    f = h["force"].to_numpy(dtype=float) if len(h) else np.array([])
-    if f.size and np.isfinite(f).any():
-        i = int(np.nanargmax(f))
-        out["peak_force"] = float(f[i])
-        out["peak_load"] = float(h["load"].to_numpy(dtype=float)[i])
+    pf, pl = peak(h["force"], h["load"]) if len(h) else (None, None)
+    if pf is not None:
+        out["peak_force"], out["peak_load"] = pf, pl
     else:
         out["peak_force"] = res.get("peak_force")
         out["peak_load"] = res.get("peak_load")
@@ -320,11 +319,11 @@ def reference_peaks(meta: dict) -> list[dict]:
             ys = [("", np.asarray(ref.get("y") or [], dtype=float))]
         for tag, y in ys:
             n = min(len(x), len(y))
-            if n == 0 or not np.isfinite(y[:n]).any():
+            py, px = peak(y[:n], x[:n])
+            if py is None:
                 continue
-            i = int(np.nanargmax(y[:n]))
             out.append({"label": str(ref.get("label", "reference")) + (f" – {tag} bound" if tag else ""),
-                        "peak": float(y[i]) * fac, "at": float(x[i]), "note": note})
+                        "peak": py * fac, "at": px, "note": note})
     return out
 
 
