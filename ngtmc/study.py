@@ -1,6 +1,10 @@
 """Named studies: the :class:`Case` dataclass and the study registry.
 
-A named study is one literate module ``studies/<name>.py`` (see ``docs/study-interface.md``) that
+The registry (:data:`STUDIES`, name -> module path, plus the entry points of the group
+``ngtmc.studies`` of installed packages) is how the library finds a named study; it never scans
+a package for them.
+
+A named study is one literate module, e.g. ``studies/<name>.py`` (``docs/study-interface.md``), that
 defines ``NAME``, ``TITLE``, ``SUMMARY``, ``PARAMETERS`` (physics: name -> (value, unit,
 description)), ``RESOLUTIONS`` (mesh and step sizes only; at least ``quick``, ``medium``,
 ``paper``), ``DEFAULT_RESOLUTION``, ``cases(p)``, ``references(p)`` and ``targets(p)``.
@@ -15,13 +19,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import importlib
-import pkgutil
 from types import ModuleType
 from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["Case", "StudyError", "list_studies", "load_study", "load_study_file", "normalise_name", "study_parameters",
+__all__ = ["Case", "StudyError", "STUDIES", "ENTRY_POINT_GROUP", "registered_studies", "list_studies", "load_study", "load_study_file", "normalise_name", "study_parameters",
            "SOLVER_PARAMETERS", "simulation_options"]
 
 #: Solver settings a study exposes next to its physics (``**SOLVER_PARAMETERS`` in PARAMETERS):
@@ -103,15 +106,43 @@ def normalise_name(name: str) -> str:
     return str(name).strip().replace("-", "_").lower()
 
 
+#: The named studies that ship with ngtmc: study name -> module path. The registry is the only
+#: place the library learns of them (it never scans a package). Other installed packages add
+#: studies through the entry-point group :data:`ENTRY_POINT_GROUP` (see
+#: ``docs/study-interface.md``), e.g. in their ``pyproject.toml``::
+#:
+#:     [project.entry-points."ngtmc.studies"]
+#:     my_study = "my_package.my_study"
+STUDIES = {
+    "contact_gamma0": "studies.contact_gamma0",
+    "design_for_contact": "studies.design_for_contact",
+    "l_panel": "studies.l_panel",
+    "step_control": "studies.step_control",
+    "three_point_bending": "studies.three_point_bending",
+}
+
+#: Entry-point group through which other packages register studies (name -> module).
+ENTRY_POINT_GROUP = "ngtmc.studies"
+
+
+def registered_studies() -> dict[str, str]:
+    """Study name -> module path: :data:`STUDIES`, then the entry points of the group
+    ``ngtmc.studies`` of every installed package (names with dashes or underscores; a name of
+    :data:`STUDIES` cannot be taken over)."""
+    from importlib.metadata import entry_points
+    out = dict(STUDIES)
+    try:
+        eps = entry_points(group=ENTRY_POINT_GROUP)
+    except Exception:  # broken metadata of an unrelated package must not hide the studies
+        eps = ()
+    for ep in eps:
+        out.setdefault(normalise_name(ep.name), ep.value.split(":")[0].strip())
+    return out
+
+
 def list_studies() -> list[str]:
-    """Names of the studies in the ``studies`` package (sorted)."""
-    import studies
-    names = []
-    for info in pkgutil.iter_modules(studies.__path__):
-        if info.name.startswith("_"):
-            continue
-        names.append(info.name)
-    return sorted(names)
+    """Names of the registered studies (:func:`registered_studies`), sorted."""
+    return sorted(registered_studies())
 
 
 def load_study_file(path) -> ModuleType:
@@ -146,7 +177,8 @@ def _check_study(mod: ModuleType, where: str):
 
 
 def load_study(name: str) -> ModuleType:
-    """Import ``studies/<name>.py``; ``name`` may use dashes or underscores. A path to a ``.py`` file
+    """Import the registered study ``name`` (:func:`registered_studies`; dashes or underscores, e.g.
+    ``studies/<name>.py`` for the studies of ngtmc). A path to a ``.py`` file
     (a user's own study with the same interface) is imported from that file (:func:`load_study_file`).
 
     Raises :class:`StudyError` listing the valid names if there is no such study.
@@ -154,11 +186,16 @@ def load_study(name: str) -> ModuleType:
     if str(name).endswith(".py") or "/" in str(name) or "\\" in str(name):
         return load_study_file(name)
     key = normalise_name(name)
-    valid = list_studies()
-    if key not in valid:
-        raise StudyError(f"unknown study {name!r}; valid studies: {', '.join(valid) or '(none)'}")
-    mod = importlib.import_module(f"studies.{key}")
-    _check_study(mod, f"studies/{key}.py")
+    registry = registered_studies()
+    if key not in registry:
+        raise StudyError(f"unknown study {name!r}; valid studies: {', '.join(sorted(registry)) or '(none)'}")
+    where = registry[key]
+    try:
+        mod = importlib.import_module(where)
+    except ImportError as e:
+        raise StudyError(f"study {key!r} is registered as module {where!r}, which cannot be imported "
+                         f"({type(e).__name__}: {e})") from e
+    _check_study(mod, getattr(mod, "__file__", None) or where)
     return mod
 
 
