@@ -91,7 +91,7 @@ def show_study(name: str) -> str:
     """Text describing a study: title, summary, every parameter with its default and unit (mm, N,
     MPa, ...) and description, and the mesh and step sizes of each resolution."""
     import textwrap
-    from .runner import _guess_unit
+    from .runfiles import _guess_unit
     from .study import load_study
     mod = load_study(name)
     lines = [f"{mod.NAME.replace('_', '-')}: {getattr(mod, 'TITLE', '')}"]

@@ -19,14 +19,18 @@ import json
 import math
 import os
 from pathlib import Path
+import platform
 import socket
+import subprocess
+import sys
 import tempfile
 import warnings
 
 import numpy as np
 
 __all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
-           "jsonable", "peak", "peak_index", "parameters_hash", "process_info", "effective_status", "read_metadata",
+           "jsonable", "peak", "peak_index", "UNITS", "versions", "git_revision", "parameter_table", "physics_hash",
+           "run_description", "parameters_hash", "process_info", "effective_status", "read_metadata",
            "resume_parameters"]
 
 #: Version of the run-folder format (``schema_version`` in metadata.json; absent means 1).
@@ -163,6 +167,101 @@ def write_npz(path, arrays: dict):
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     write_atomic(path, buf.getvalue())
+
+
+# ====================================================================== metadata
+#: Units of the quantities of a run folder (``units`` in metadata.json).
+UNITS = {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"}
+
+
+def versions() -> dict:
+    """Versions of ngtmc, Python and the libraries that computed a run."""
+    import pandas as pd
+
+    from . import __version__
+    v = {"ngtmc": __version__, "python": platform.python_version(), "numpy": np.__version__, "pandas": pd.__version__}
+    try:
+        import ngsolve
+        v["ngsolve"] = ngsolve.__version__
+    except Exception:  # pragma: no cover
+        pass
+    try:
+        import netgen
+        v["netgen"] = getattr(netgen, "__version__", None) or getattr(netgen, "version", None)
+    except Exception:  # pragma: no cover
+        pass
+    try:
+        import scipy
+        v["scipy"] = scipy.__version__
+    except Exception:  # pragma: no cover
+        pass
+    return {k: str(val) for k, val in v.items() if val is not None}
+
+
+def git_revision() -> str | None:
+    """Short git revision of the ngtmc source (``-dirty`` with uncommitted changes), or None."""
+    here = Path(__file__).resolve().parent
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=here, capture_output=True,
+                             text=True, timeout=10)
+        if rev.returncode != 0:
+            return None
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", "."],
+                               cwd=here.parent, capture_output=True, text=True, timeout=10)
+        suffix = "-dirty" if dirty.returncode == 0 and dirty.stdout.strip() else ""
+        return rev.stdout.strip() + suffix
+    except Exception:
+        return None
+
+
+def _guess_unit(key: str) -> str:
+    if key == "h" or key.startswith("h_") or key.startswith("du_") or key.endswith("_load"):
+        return "mm"
+    return "-"
+
+
+def parameter_table(mod, p: dict) -> dict:
+    """Every parameter with value, unit, description: PARAMETERS, resolution keys, then anything else."""
+    res_desc = getattr(mod, "RESOLUTION_PARAMETERS", {})
+    out = {}
+    for k, (_, unit, desc) in mod.PARAMETERS.items():
+        out[k] = {"value": p.get(k), "unit": unit, "description": desc}
+    for k, v in p.items():
+        if k in out:
+            continue
+        unit, desc = res_desc.get(k, (_guess_unit(k), "mesh or step size (set by the resolution)"))
+        out[k] = {"value": v, "unit": unit, "description": desc}
+    return out
+
+
+def physics_hash(mod, p: dict) -> str:
+    """:func:`parameters_hash` of the physics alone (the study's PARAMETERS): runs with equal
+    physics hashes differ only in resolution, and the report index compares only those."""
+    return parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p})
+
+
+def run_description(mod, p: dict, resolution: str | None, overrides: dict | None) -> dict:
+    """The fields of ``metadata.json`` that say what a run of study ``mod`` computed and with what:
+    study, title, summary_text, schema_version, resolution, versions, git_revision, units,
+    parameters (value, unit, description of every resolved parameter ``p``), overrides,
+    parameters_hash, physics_hash, command and process. The runner and every study that writes
+    its own files (``studies/design_for_contact.py``) start their metadata from it."""
+    return {
+        "study": mod.NAME,
+        "title": getattr(mod, "TITLE", mod.NAME),
+        "summary_text": getattr(mod, "SUMMARY", ""),
+        "schema_version": SCHEMA_VERSION,
+        "resolution": resolution,
+        "versions": versions(),
+        "git_revision": git_revision(),
+        "units": dict(UNITS),
+        "parameters": parameter_table(mod, p),
+        "overrides": dict(overrides or {}),
+        "parameters_hash": parameters_hash(p),
+        "physics_hash": physics_hash(mod, p),
+        "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else None,
+        "process": process_info(),
+    }
 
 
 # ====================================================================== the physics of a run

@@ -44,7 +44,8 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, CheckpointStore, effective_status, jsonable, peak,
+from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, UNITS, CheckpointStore, effective_status, jsonable, peak,
+                       git_revision, parameter_table, physics_hash, run_description, versions,
                        parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
                        write_atomic, write_json, write_npz)
 from .plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput, force_unit
@@ -59,70 +60,15 @@ __all__ = ["run_study", "run_scene", "scene_study", "default_output", "HISTORY_C
 #: (:data:`ngtmc.runfiles.HISTORY_UNITS`, their units).
 HISTORY_COLUMNS = ["case", *HISTORY_UNITS]
 
-_UNITS = {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"}
-
+# the metadata pieces live in ngtmc.runfiles (the run-folder schema); kept here for their callers
+_UNITS = UNITS
+_versions, _git_revision, _parameter_table = versions, git_revision, parameter_table
 _jsonable = jsonable            # kept for the callers of the former private names
 _write_json = write_json
 _write_npz = write_npz
 
 
 # ====================================================================== metadata pieces
-def _versions() -> dict:
-    from . import __version__
-    v = {"ngtmc": __version__, "python": platform.python_version(), "numpy": np.__version__, "pandas": pd.__version__}
-    try:
-        import ngsolve
-        v["ngsolve"] = ngsolve.__version__
-    except Exception:  # pragma: no cover
-        pass
-    try:
-        import netgen
-        v["netgen"] = getattr(netgen, "__version__", None) or getattr(netgen, "version", None)
-    except Exception:  # pragma: no cover
-        pass
-    try:
-        import scipy
-        v["scipy"] = scipy.__version__
-    except Exception:  # pragma: no cover
-        pass
-    return {k: str(val) for k, val in v.items() if val is not None}
-
-
-def _git_revision() -> str | None:
-    here = Path(__file__).resolve().parent
-    try:
-        rev = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=here, capture_output=True,
-                             text=True, timeout=10)
-        if rev.returncode != 0:
-            return None
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", "."],
-                               cwd=here.parent, capture_output=True, text=True, timeout=10)
-        suffix = "-dirty" if dirty.returncode == 0 and dirty.stdout.strip() else ""
-        return rev.stdout.strip() + suffix
-    except Exception:
-        return None
-
-
-def _guess_unit(key: str) -> str:
-    if key == "h" or key.startswith("h_") or key.startswith("du_") or key.endswith("_load"):
-        return "mm"
-    return "-"
-
-
-def _parameter_table(mod: ModuleType, p: dict) -> dict:
-    """Every parameter with value, unit, description: PARAMETERS, resolution keys, then anything else."""
-    res_desc = getattr(mod, "RESOLUTION_PARAMETERS", {})
-    out = {}
-    for k, (_, unit, desc) in mod.PARAMETERS.items():
-        out[k] = {"value": p.get(k), "unit": unit, "description": desc}
-    for k, v in p.items():
-        if k in out:
-            continue
-        unit, desc = res_desc.get(k, (_guess_unit(k), "mesh or step size (set by the resolution)"))
-        out[k] = {"value": v, "unit": unit, "description": desc}
-    return out
-
-
 def _mesh_info(solver) -> dict:
     mesh = solver.mesh
     h = solver.h if getattr(solver, "h", None) is not None else solver.scene.element_sizes()
@@ -205,7 +151,7 @@ class _Run:
         self.features: dict = {}                # what the scenes have (fracture, void, regulariser), for the report
         #: hash of the physical parameters alone (PARAMETERS, not the resolution's mesh and step sizes):
         #: runs with equal physics_hash differ only in resolution (the index compares only those)
-        self.physics_hash = parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p})
+        self.physics_hash = physics_hash(mod, p)
         self.rows: dict[str, list[dict]] = {}
         self.snaps: dict[str, dict] = {}      # case -> arrays for snapshots.npz
         self.results: dict[str, dict] = {}
@@ -261,22 +207,11 @@ class _Run:
         thickness = self.thickness if self.force_unit is not None else (
             float(p.get("thickness", 1.0)) if dim == 2 else None)
         meta = {
-            "study": mod.NAME,
-            "title": getattr(mod, "TITLE", mod.NAME),
-            "summary_text": getattr(mod, "SUMMARY", ""),
-            "schema_version": SCHEMA_VERSION,
-            "resolution": self.resolution,
+            **run_description(mod, p, self.resolution, self.overrides),
             "created": self.created,
             "status": self.status,
-            "versions": _versions(),
-            "git_revision": _git_revision(),
-            "units": dict(_UNITS),
             "thickness_mm": thickness,
             "force_unit": self.force_unit or force_unit(dim, thickness),
-            "parameters": _parameter_table(mod, p),
-            "overrides": self.overrides,
-            "parameters_hash": self.hash,
-            "physics_hash": self.physics_hash,
             "mesh": {k: v for k, v in (self.mesh or {}).items() if k != "dim"},
             "wall_time_s": self.wall_time(),
             "cases": [dict(name=c.name, label=c.label, parameters=c.parameters, **self.case_meta.get(c.name, {}))
@@ -285,10 +220,8 @@ class _Run:
             "targets": list(mod.targets(p)) if hasattr(mod, "targets") else [],
             "results": self.study_results(),
             "cpu_time_s": time.process_time(),
-            "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else None,
             "host": {"platform": platform.platform(), "cpu_count": os.cpu_count(),
                      "threads": _threads()},
-            "process": process_info(),
         }
         if self.features:
             meta["features"] = dict(self.features)
