@@ -54,7 +54,7 @@ one adjoint sweep (medium: 16.7 s and 7.5 s on average on a shared 2-core machin
 """
 from __future__ import annotations
 
-import json
+import sys
 import time
 from pathlib import Path as _FsPath
 
@@ -64,6 +64,8 @@ import ngsolve as ngs
 
 import ngtmc
 from ngtmc import sensitivities as sens
+from ngtmc.plugins import force_unit
+from ngtmc.runfiles import run_description, write_atomic, write_json, write_npz
 from ngtmc.study import Case
 
 NAME = "design_for_contact"
@@ -333,8 +335,6 @@ def _vertex_fields(path, n):
 
 def write_snapshots(out, cases: dict, n_frames: int = 4):
     """snapshots.npz in the run-directory format for {case: path} (frames at evenly spaced states)."""
-    from ngtmc import runner
-
     arrays = {}
     for case, path in cases.items():
         mesh = path.solver.mesh
@@ -345,10 +345,7 @@ def write_snapshots(out, cases: dict, n_frames: int = 4):
         arrays.update({f"{case}__vertices": pts, f"{case}__triangles": tri, f"{case}__rho": path.rho,
                        f"{case}__loads": path.loads[idx], f"{case}__u": np.array(us), f"{case}__alpha": np.array(als)})
         path.activate()
-    import io
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    runner.write_atomic(_FsPath(out) / "snapshots.npz", buf.getvalue())
+    write_npz(_FsPath(out) / "snapshots.npz", arrays)
 
 
 def write_optimisation_page(out) -> _FsPath | None:
@@ -396,6 +393,23 @@ def _history_rows(case: str, path) -> pd.DataFrame:
     return h
 
 
+def run_metadata(p: dict, resolution: str, overrides: dict | None, mesh: dict, cases: list[dict], results: dict,
+                 wall_time_s: float) -> dict:
+    """metadata.json of an optimisation run in the run-folder schema of ``ngtmc.runfiles``: the
+    common description of a run (:func:`ngtmc.runfiles.run_description`: schema version, versions,
+    units, every parameter with its unit, overrides, parameter hashes, process), then this run's
+    mesh (elements, vertices, design elements), cases, results and wall time (s)."""
+    return {
+        **run_description(sys.modules[__name__], p, resolution, overrides),
+        "created": pd.Timestamp.now(tz="UTC").isoformat(), "status": "completed",
+        "thickness_mm": p["thickness"], "force_unit": force_unit(2, p["thickness"]),
+        "resolution_values": RESOLUTIONS[resolution],
+        "mesh": mesh, "wall_time_s": wall_time_s, "cases": cases,
+        "references": references(p), "targets": targets(p), "results": results,
+        "notes": "optimisation study: cases() gives only the initial design; run() writes optimisation.csv and designs.npz",
+    }
+
+
 def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = None, report: bool = True) -> _FsPath:
     """Run the optimisation and write the run folder (see the module docstring): metadata.json,
     history.csv (cases initial and final), snapshots.npz, optimisation.csv, designs.npz,
@@ -411,42 +425,31 @@ def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = 
     first, last = log[0], max(log, key=lambda r: r["W"] if r["volume"] <= p["volume_fraction"] + 1e-6 else -np.inf)
     hist = pd.concat([_history_rows("initial", first["path"]), _history_rows("final", last["path"])], ignore_index=True)
     cols = [c for c in runner.HISTORY_COLUMNS if c in hist.columns]
-    runner.write_atomic(out / "history.csv", hist[cols].to_csv(index=False))
+    write_atomic(out / "history.csv", hist[cols].to_csv(index=False))
     opt = pd.DataFrame({"iteration": [r["iteration"] for r in log], "objective_W": [r["W"] for r in log],
                         "volume_fraction": [r["volume"] for r in log],
                         "wall_time": [r["time"] - t0 for r in log]})
-    runner.write_atomic(out / "optimisation.csv", opt.to_csv(index=False))
+    write_atomic(out / "optimisation.csv", opt.to_csv(index=False))
     keep = sorted({0, len(log) // 2, len(log) - 1, last["iteration"]})
-    np.savez_compressed(out / "designs.npz", centroids=prob.centroids, areas=prob.areas, pad_mask=prob.mask,
-                        iterations=np.array(keep), rho=np.array([prob.rho(log[i]["x"]) for i in keep]),
-                        objective=np.array([log[i]["W"] for i in keep]))
+    write_npz(out / "designs.npz", {"centroids": prob.centroids, "areas": prob.areas, "pad_mask": prob.mask,
+                                    "iterations": np.array(keep), "rho": np.array([prob.rho(log[i]["x"]) for i in keep]),
+                                    "objective": np.array([log[i]["W"] for i in keep])})
     ev = pd.DataFrame(prob.evaluations)
-    meta = {
-        "study": NAME, "title": TITLE, "summary_text": SUMMARY, "resolution": resolution,
-        "created": pd.Timestamp.now(tz="UTC").isoformat(), "status": "completed",
-        "versions": {"ngtmc": ngtmc.__version__, "ngsolve": ngs.__version__, "numpy": np.__version__},
-        "units": {"length": "mm", "force": "N", "stress": "MPa", "energy": "N mm", "time": "s"},
-        "thickness_mm": p["thickness"], "force_unit": "N/mm",
-        "parameters": {k: {"value": p[k], "unit": v[1], "description": v[2]} for k, v in PARAMETERS.items()},
-        "resolution_values": RESOLUTIONS[resolution],
-        "mesh": {"n_elements": prob.mesh.ne, "n_vertices": prob.mesh.nv, "n_design": int(prob.mask.sum())},
-        "wall_time_s": time.perf_counter() - t0,
-        "cases": [{"name": "initial", "label": "initial design", "parameters": {}},
-                  {"name": "final", "label": f"optimised design (iteration {last['iteration']})", "parameters": {}}],
-        "references": [], "targets": [],
-        "results": {
-            "initial": runner.case_results(_history_rows("initial", first["path"])),
-            "final": runner.case_results(_history_rows("final", last["path"])),
-            "optimisation": {"W_initial": first["W"], "W_final": last["W"],
-                             "improvement": last["W"] / first["W"] - 1.0, "iterations": len(log) - 1,
-                             "evaluations": len(prob.evaluations), "rejected_trials": prob.rejected,
-                             "last_failure": prob.failure,
-                             "mean_forward_time_s": float(ev["forward_time"].mean()),
-                             "mean_gradient_time_s": float(ev["gradient_time"].mean())},
-        },
-        "notes": "optimisation study: cases() gives only the initial design; run() writes optimisation.csv and designs.npz",
+    results = {
+        "initial": runner.case_results(_history_rows("initial", first["path"])),
+        "final": runner.case_results(_history_rows("final", last["path"])),
+        "optimisation": {"W_initial": first["W"], "W_final": last["W"],
+                         "improvement": last["W"] / first["W"] - 1.0, "iterations": len(log) - 1,
+                         "evaluations": len(prob.evaluations), "rejected_trials": prob.rejected,
+                         "last_failure": prob.failure,
+                         "mean_forward_time_s": float(ev["forward_time"].mean()),
+                         "mean_gradient_time_s": float(ev["gradient_time"].mean())},
     }
-    runner.write_atomic(out / "metadata.json", json.dumps(meta, indent=2, default=float) + "\n")
+    mesh = {"n_elements": prob.mesh.ne, "n_vertices": prob.mesh.nv, "n_design": int(prob.mask.sum())}
+    cases = [{"name": "initial", "label": "initial design", "parameters": {}},
+             {"name": "final", "label": f"optimised design (iteration {last['iteration']})", "parameters": {}}]
+    write_json(out / "metadata.json", run_metadata(p, resolution, overrides, mesh, cases, results,
+                                                   time.perf_counter() - t0))
     write_snapshots(out, {"initial": first["path"], "final": last["path"]})
     write_optimisation_page(out)
     if report:

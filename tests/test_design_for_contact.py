@@ -58,3 +58,24 @@ def test_short_optimisation_improves_the_objective(tmp_path):
     assert opt["volume_fraction"].max() <= D.PARAMETERS["volume_fraction"][0] + 1e-6
     des = np.load(out / "designs.npz")
     assert des["rho"].shape[1] == des["pad_mask"].size
+
+
+def test_run_metadata_follows_the_run_folder_schema(tmp_path):
+    """The optimisation's metadata.json is built from ngtmc.runfiles.run_description (no copy of
+    its own): schema version, every parameter with its unit, the overrides and both hashes."""
+    from ngtmc.runfiles import SCHEMA_VERSION, UNITS, parameters_hash, read_metadata, run_description, write_json
+
+    p = D._params("quick", iterations=2)
+    cases = [{"name": "initial", "label": "initial design", "parameters": {}}]
+    meta = D.run_metadata(p, "quick", {"iterations": 2}, {"n_elements": 10, "n_vertices": 8, "n_design": 3},
+                          cases, {"initial": {"peak_force": float("nan")}}, 1.5)
+    write_json(tmp_path / "metadata.json", meta)
+    back = read_metadata(tmp_path)
+    assert set(run_description(D, p, "quick", {"iterations": 2})) <= set(back)
+    assert back["study"] == "design_for_contact" and back["schema_version"] == SCHEMA_VERSION
+    assert back["units"] == UNITS and back["force_unit"] == "N/mm" and back["thickness_mm"] == p["thickness"]
+    assert back["overrides"] == {"iterations": 2} and back["parameters_hash"] == parameters_hash(p)
+    assert back["parameters"]["E"] == {"value": 1000.0, "unit": "MPa", "description": D.PARAMETERS["E"][2]}
+    assert back["parameters"]["iterations"]["value"] == 2
+    assert back["results"]["initial"]["peak_force"] is None  # NaN is written as null, the file stays JSON
+    assert back["status"] == "completed" and back["wall_time_s"] == 1.5
