@@ -257,10 +257,10 @@ class _Run:
         if not done:
             for k, v in state["solver"].items():
                 arrays["solver__" + k] = np.asarray(v)
-            arrays["scalars"] = np.array([state["t"], state["step"], state["last_delta_wf"], state["wf_prev"],
-                                          state["elapsed"]], dtype=float)
-            arrays["control"] = np.array(json.dumps(state["control"]))
-            arrays["last_step"] = np.array(json.dumps(state.get("last_step")))
+            # everything else of the Simulation's state by name (JSON keeps floats exactly), so the
+            # checkpoint does not depend on the layout of that state
+            arrays["simulation"] = np.array(json.dumps(jsonable({k: v for k, v in state.items()
+                                                                 if k not in ("solver", "rows")})))
         if snaps is not None:
             for k, v in snaps.state().items():
                 arrays["snap__" + k] = v
@@ -274,12 +274,15 @@ class _Run:
               "results": json.loads(str(d["results"])), "case_meta": json.loads(str(d["case_meta"])),
               "parameters_hash": str(d["parameters_hash"]) if "parameters_hash" in d else None}
         if not ck["done"]:
-            sc = d["scalars"]
-            ck["state"] = {"solver": {k[len("solver__"):]: v for k, v in d.items() if k.startswith("solver__")},
-                           "t": float(sc[0]), "step": int(sc[1]), "last_delta_wf": float(sc[2]),
-                           "wf_prev": float(sc[3]), "elapsed": float(sc[4]),
-                           "control": json.loads(str(d["control"])), "rows": ck["rows"],
-                           "last_step": json.loads(str(d["last_step"])) if "last_step" in d else None}
+            solver = {k[len("solver__"):]: v for k, v in d.items() if k.startswith("solver__")}
+            if "simulation" in d:
+                ck["state"] = {**json.loads(str(d["simulation"])), "solver": solver, "rows": ck["rows"]}
+            else:  # written before 2026-11-24: positional scalars
+                sc = d["scalars"]
+                ck["state"] = {"solver": solver, "t": float(sc[0]), "step": int(sc[1]), "last_delta_wf": float(sc[2]),
+                               "wf_prev": float(sc[3]), "elapsed": float(sc[4]),
+                               "control": json.loads(str(d["control"])), "rows": ck["rows"],
+                               "last_step": json.loads(str(d["last_step"])) if "last_step" in d else None}
         ck["snap"] = {k[len("snap__"):]: v for k, v in d.items() if k.startswith("snap__")}
         ck["snaparr"] = {k[len("snaparr__"):]: v for k, v in d.items() if k.startswith("snaparr__")}
         return ck
