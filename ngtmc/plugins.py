@@ -49,7 +49,8 @@ class Progress(Plugin):
     main:"``); ``unit`` is the force unit of the run (:func:`force_unit`). The time left is an
     estimate from the pace (load path per second of wall time) over the last ``window`` seconds,
     so shrinking steps after a crack starts slow it down instead of being averaged away; it is
-    labelled as an estimate. ``enabled`` may be a callable, which then receives each row instead.
+    labelled as an estimate, and left out (said so) while it exceeds 20 times the time so far
+    (steps of a crack running at almost constant load, after which they grow again). ``enabled`` may be a callable, which then receives each row instead.
     """
 
     def __init__(self, enabled: bool | Callable = True, prefix: str = "[ngtmc]", unit: str = "N",
@@ -84,7 +85,12 @@ class Progress(Plugin):
         left = self.time_left(el, sim.t, total)
         eta = ""
         if left is not None and frac < 1.0:
-            eta = f", about {left[0]:.0f} s left (estimate from the pace of the last {left[1]:.0f} s)"
+            if left[0] > 20.0 * max(el, 60.0):
+                # tiny steps (a crack running at almost constant load): the recent pace says
+                # nothing about the rest of the path, where the steps grow again
+                eta = ", no estimate of the time left while the steps are this short"
+            else:
+                eta = f", about {left[0]:.0f} s left (estimate from the pace of the last {left[1]:.0f} s)"
         alpha = row.get("max_alpha")
         alpha = f"  max alpha {alpha:.3f}" if alpha is not None and getattr(sim.solver, "alpha", None) is not None else ""
         return (f"{self.prefix} step {row['step']:5d}  load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  "

@@ -178,3 +178,16 @@ def test_result_units_carry_the_force_unit(scene_run):
     meta = json.loads((out / "metadata.json").read_text())
     assert res.units["force"] == meta["force_unit"] == "N/mm"
     assert ngtmc.Simulation(_bar(thickness=2.0), 0.001).units["force"] == "N"
+
+
+def test_no_time_left_while_the_steps_are_tiny():
+    """While a crack runs the steps are 1e-6 of the path: the recent pace would promise days; the
+    line says there is no estimate instead."""
+    p = Progress(True, unit="N/mm", window=20.0)
+    for el, t in [(0.0, 0.0), (50.0, 0.5), (60.0, 0.5 + 1e-6), (70.0, 0.5 + 2e-6), (80.0, 0.5 + 3e-6)]:
+        p.time_left(el, t, 1.0)
+    sim = _FakeSim(1.0)
+    sim.t = 0.5 + 4e-6
+    line = p.line(sim, {"step": 9, "load": sim.t, "step_size": 1e-6, "force": 30.0, "newton_iterations": 3,
+                        "cutbacks": 0, "wall_time": 90.0})
+    assert "no estimate of the time left while the steps are this short" in line and "s left" not in line
