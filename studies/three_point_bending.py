@@ -341,16 +341,37 @@ def targets(p: dict) -> list[dict]:
     ]
 
 
+def elastic_slope(load, force, lo: float = 0.25, hi: float = 0.60) -> float:
+    """Secant slope of the rising branch, N/mm per micrometre of load, between the first points
+    where the force reaches ``lo`` and ``hi`` times the peak (loads linearly interpolated; so the
+    coarse digitised references are measured the same way). With the indenter both lie after
+    contact: the void carries at most 1.3 % of the peak. NaN if the curve has no rising branch."""
+    x, y = np.asarray(load, dtype=float), np.asarray(force, dtype=float)
+    i = int(np.nanargmax(y))
+
+    def crossing(level):
+        j = int(np.argmax(y[: i + 1] >= level))
+        if j == 0:
+            return float("nan")
+        return x[j - 1] + (level - y[j - 1]) * (x[j] - x[j - 1]) / (y[j] - y[j - 1])
+
+    a, b = crossing(lo * y[i]), crossing(hi * y[i])
+    return float((hi - lo) * y[i] / (1e3 * (b - a)))
+
+
 def post_results(p: dict, history, results: dict) -> dict:
-    """Add per case the void's resistance before contact, N/mm: ``force_before_contact``, the largest
+    """Add per case ``elastic_slope`` (N/mm per micrometre, :func:`elastic_slope`) and, with the
+    indenter, the void's resistance before contact, N/mm: ``force_before_contact``, the largest
     |force| while the load is at most 0.9 gap (the void is then squeezed to a tenth of its
     thickness), and ``force_at_gap``, the force interpolated at load = gap (the void stiffens as
     J -> 0, so the force starts to rise just before the gap is closed)."""
     gap = float(p["gap"])
-    if load_shift(p) == 0.0:
-        return results  # no gap to cross with the window
     for name, r in results.items():
         h = history[history["case"] == name]
+        if len(h) > 2:
+            r["elastic_slope"] = elastic_slope(h["load"], h["force"])
+        if load_shift(p) == 0.0:
+            continue  # no gap to cross with the window
         pre = h[h["load"] <= 0.9 * gap + 1e-12]
         if len(pre):
             r["force_before_contact"] = float(pre["force"].abs().max())

@@ -174,3 +174,12 @@ def test_window_loading_scene():
     t = {x["quantity"]: x for x in tpb.targets(p)}
     assert t["peak_load"]["value"] == pytest.approx(0.046)
     assert case.snapshot_loads == pytest.approx([0.03, 0.04, 0.05, 0.06, 0.08, 0.10])  # the indenter's, minus the gap
+
+
+def test_elastic_slope():
+    """Secant between 25 % and 60 % of the peak, N/mm per micrometre: exact on a line, and 0.915 on
+    Ambati's digitised curve (0.92 read off the figure)."""
+    x = np.array([0.0, 0.01, 0.02, 0.03, 0.031])
+    assert tpb.elastic_slope(x, [0.0, 5.0, 10.0, 15.0, 1.0]) == pytest.approx(0.5)
+    assert tpb.elastic_slope(*tpb.reference_curves(0.0)["ambati"]) == pytest.approx(0.915, abs=1e-3)
+    assert np.isnan(tpb.elastic_slope([0.0, 0.01], [5.0, 1.0]))
