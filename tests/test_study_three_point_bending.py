@@ -121,3 +121,65 @@ def test_quick_peak_load(quick_run):
     _, meta, _ = quick_run
     u = meta["results"]["main"]["peak_load"]
     assert u == pytest.approx(0.096, rel=0.10), f"displacement at peak {u:.4f} mm"
+
+
+# ---------------------------------------------------------------- fidelity variants (issue 15)
+def test_variant_parameters_validate():
+    """loading, split and formulation: defaults are the paper's set-up; bad values are refused with
+    the parameter's name and the valid values."""
+    from ngtmc.study import StudyError
+    P = {k: v[0] for k, v in tpb.PARAMETERS.items()}
+    assert (P["loading"], P["split"], P["formulation"], P["window_width"]) == ("indenter", "vol-dev-J", "hybrid", 0.1)
+    for key, bad, valid in (("loading", "punch", "'indenter', 'window'"), ("split", "miehe", "'spectral'"),
+                            ("formulation", "aniso", "'anisotropic'")):
+        _, p = study_parameters(tpb, "quick", {key: bad})
+        with pytest.raises(StudyError, match=f"{key} = '{bad}' is not one of .*{valid}"):
+            tpb.cases(p)
+    _, p = study_parameters(tpb, "quick", {"loading": "window", "window_width": "0.5"})
+    with pytest.raises(StudyError, match="window_width"):
+        tpb.cases(p)
+    with pytest.raises(StudyError, match="window_width expects a number"):
+        study_parameters(tpb, "quick", {"window_width": "wide"})
+
+
+def test_split_reaches_the_scene():
+    _, p = study_parameters(tpb, "quick", {"split": "spectral", "formulation": "anisotropic"})
+    q = tpb.cases(p)[0].scene.args[0]  # the scene is built lazily from this dict
+    assert (q["split"], q["formulation"]) == ("spectral", "anisotropic")
+
+
+def test_window_loading_scene():
+    """Ambati's set-up: the load on a 0.1 mm window of the beam top, no indenter, no void, no
+    regulariser, order 1, tangential free; references unshifted (peak 42 N/mm at 0.046 mm)."""
+    _, p = study_parameters(tpb, "quick", {"loading": "window", "h_band": 0.03, "h_beam": 0.4,
+                                           "split": "spectral"})
+    case = tpb.cases(p)[0]
+    with pytest.warns(ngtmc.ResolutionWarning):
+        scene = case.build_scene().check()
+    mesh = scene.mesh
+    assert set(mesh.GetMaterials()) == {"beam", "band", "support_zone"}
+    assert {"support_left", "support_right", "load"} <= set(mesh.GetBoundaries())
+    assert scene.regulariser is None and scene.displacement_order == 1 and not scene.has_void
+    assert scene.split == "spectral" and scene.formulation == "hybrid"
+    assert scene.load.direction == "-y" and not scene.load.hold_tangential
+    pts = np.asarray(mesh.ngmesh.Coordinates())
+    assert pts[:, 1].max() == pytest.approx(2.0)
+    # the window: the boundary 'load' spans [3.95, 4.05] on y = 2
+    import ngsolve as ngs
+    length = ngs.Integrate(ngs.CoefficientFunction(1.0), mesh, definedon=mesh.Boundaries("load"))
+    assert length == pytest.approx(0.1)
+    amb = tpb.references(p)[0]
+    i = int(np.argmax(amb["y"]))
+    assert amb["y"][i] == pytest.approx(42.0) and amb["x"][i] == pytest.approx(0.046) and "unshifted" in amb["label"]
+    t = {x["quantity"]: x for x in tpb.targets(p)}
+    assert t["peak_load"]["value"] == pytest.approx(0.046)
+    assert case.snapshot_loads == pytest.approx([0.03, 0.04, 0.05, 0.06, 0.08, 0.10])  # the indenter's, minus the gap
+
+
+def test_elastic_slope():
+    """Secant between 25 % and 60 % of the peak, N/mm per micrometre: exact on a line, and 0.915 on
+    Ambati's digitised curve (0.92 read off the figure)."""
+    x = np.array([0.0, 0.01, 0.02, 0.03, 0.031])
+    assert tpb.elastic_slope(x, [0.0, 5.0, 10.0, 15.0, 1.0]) == pytest.approx(0.5)
+    assert tpb.elastic_slope(*tpb.reference_curves(0.0)["ambati"]) == pytest.approx(0.915, abs=1e-3)
+    assert np.isnan(tpb.elastic_slope([0.0, 0.01], [5.0, 1.0]))
