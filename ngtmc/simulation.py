@@ -19,7 +19,6 @@ at the minimum increment raises :class:`StepFailure`, which carries the history 
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 import math
 import sys
@@ -32,7 +31,7 @@ import pandas as pd
 from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak
 from .scene import Scene
 from .solver import NewtonOptions, Solver
-from .stepping import AdaptiveStepControl, ControlState, Schedule, StepObservation
+from .stepping import AdaptiveStepControl, ControlState, Schedule
 
 __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "simulate"]
 
@@ -158,7 +157,6 @@ class Simulation:
         self.step = 0
         self.rows: list[dict] = []
         self.last_delta_wf = 0.0
-        self.last_step: StepObservation | None = None
         #: run state of the step control (scale, successes); the control itself holds none
         self.control_state: ControlState = control.initial_state()
         self._wf_prev = 0.0
@@ -377,7 +375,7 @@ class Simulation:
         s = self.solver
         ctrl = self.control
         t_turn = self.schedule.next_turning_time(self.t)
-        du = ctrl.next_increment(self.last_step, self.control_state)
+        du = ctrl.proposal(self.last_delta_wf, self.control_state)
         saved = s.get_state()
         cutbacks = 0
         totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
@@ -415,12 +413,6 @@ class Simulation:
         wf = s.fracture_energy_per_thickness()
         self.last_delta_wf = wf - self._wf_prev
         self._wf_prev = wf
-        dalpha = 0.0
-        if s.alpha is not None:
-            dalpha = float(np.max(np.abs(s.alpha.vec.FV().NumPy() - saved["alpha"]), initial=0.0))
-        self.last_step = StepObservation(step_size=step_size, attempted=du, delta_wf=self.last_delta_wf,
-                                         dalpha_max=dalpha, newton_iterations=totals["newton_iterations"],
-                                         cutbacks=cutbacks)
         self._report_progress(row)
         return row
 
@@ -476,7 +468,6 @@ class Simulation:
         """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows."""
         return {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
                 "control": self.control_state.as_dict(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
-                "last_step": None if self.last_step is None else dataclasses.asdict(self.last_step),
                 "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows]}
 
     def set_state(self, st: dict):
@@ -486,11 +477,6 @@ class Simulation:
         self.step = int(st["step"])
         self.control_state = ControlState.from_dict(st["control"])
         self.last_delta_wf = float(st["last_delta_wf"])
-        last = st.get("last_step")
-        if last is not None:
-            self.last_step = StepObservation(**last)
-        else:  # a state written before the observation was recorded: Eq. 20 needs only delta_wf
-            self.last_step = StepObservation(delta_wf=self.last_delta_wf) if self.step > 0 else None
         self._wf_prev = float(st["wf_prev"])
         self._elapsed_before = float(st["elapsed"])
         self._t_start = None

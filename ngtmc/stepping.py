@@ -14,9 +14,8 @@ with W_f of Eq. 19 per unit thickness (N mm / mm = N), k_u in 1/N, a floor du_mi
 that halves on a failed step (down to du_min) and doubles back towards 1 after ``n_s`` successful
 steps in a row.
 
-A step rule reads the :class:`StepObservation` of the last accepted step and its
-:class:`ControlState` through ``next_increment``; the simulation builds and keeps both (a rule
-needs no other access to the run, and keeps no run state itself).
+The rule keeps no run state: its scale and count of successes are a :class:`ControlState` that
+the simulation keeps and passes in.
 """
 from __future__ import annotations
 
@@ -26,7 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["Schedule", "AdaptiveStepControl", "ControlState", "StepObservation"]
+__all__ = ["Schedule", "AdaptiveStepControl", "ControlState"]
 
 
 class Schedule:
@@ -80,25 +79,6 @@ class Schedule:
 
     def __repr__(self):
         return f"Schedule({self.points.tolist()})"
-
-
-@dataclass(frozen=True)
-class StepObservation:
-    """What an accepted load step did, as seen by a step rule.
-
-    step_size: load increment actually taken, mm (shorter than ``attempted`` when the step landed
-    on a turning point of the schedule); attempted: the increment tried last (after any cut-backs),
-    mm; delta_wf: increase of W_f (Eq. 19) per unit thickness, N; dalpha_max: largest change of the
-    phase field at a dof, dimensionless (0 without fracture); newton_iterations: Newton iterations
-    of the step (all passes and cut-backs); cutbacks: failed attempts before it.
-    """
-
-    step_size: float = 0.0
-    attempted: float = 0.0
-    delta_wf: float = 0.0
-    dalpha_max: float = 0.0
-    newton_iterations: int = 0
-    cutbacks: int = 0
 
 
 @dataclass(frozen=True)
@@ -169,11 +149,6 @@ class AdaptiveStepControl:
         thickness), at the scale of ``state``."""
         du = state.scale * self.du_max * math.exp(-self.k_u * max(float(delta_wf), 0.0))
         return max(du, self.du_min)
-
-    def next_increment(self, last: StepObservation | None, state: ControlState = ControlState()) -> float:
-        """Increment (mm) for the next step: Eq. 20 on ``last.delta_wf`` (du_max before the first
-        step), at the scale of ``state``."""
-        return self.proposal(0.0 if last is None else last.delta_wf, state)
 
     def accepted(self, state: ControlState) -> ControlState:
         """The state after a successful step: the scale doubles (up to 1) after n_s successes in a row."""

@@ -302,15 +302,15 @@ def test_history_columns_defined_once():
 
 def test_checkpoint_state_by_name_and_the_positional_form_still_loads():
     """The Simulation state is stored by name (JSON, floats exact); a checkpoint in the older
-    positional form (``scalars``, ``control``, ``last_step``) decodes to the same state."""
+    positional form (``scalars``, ``control``) decodes to the same state."""
     from ngtmc.runner import _Run
     state = {"t": 0.0123456789012345, "step": 7, "last_delta_wf": 1.5e-7, "wf_prev": 0.25, "elapsed": 3.5,
-             "control": {"scale": 0.5, "successes": 2}, "last_step": {"step_size": 1e-3, "delta_wf": 1.5e-7}}
+             "control": {"scale": 0.5, "successes": 2}}
     common = {"done": np.array(False), "rows": np.array("[]"), "results": np.array("{}"),
               "case_meta": np.array("{}"), "solver__u": np.arange(3.0)}
     new = dict(common, simulation=np.array(json.dumps(state)))
     old = dict(common, scalars=np.array([state[k] for k in ("t", "step", "last_delta_wf", "wf_prev", "elapsed")]),
-               control=np.array(json.dumps(state["control"])), last_step=np.array(json.dumps(state["last_step"])))
+               control=np.array(json.dumps(state["control"])))
     a, b = _Run._decode_checkpoint(new)["state"], _Run._decode_checkpoint(old)["state"]
     assert np.array_equal(a.pop("solver")["u"], b.pop("solver")["u"])
     assert a == b and a["t"] == state["t"] and a["step"] == 7
