@@ -150,12 +150,8 @@ class Solver:
         # loads: the Dirichlet values of each displacement load at a given lambda, their reaction
         # weights d u_D / d lambda, and the external work of the tractions
         self.load = 0.0
-        self._build_loads()
-        self.e_load = ngs.GridFunction(self.fes_u)
-        self.e_load.vec.FV().NumPy()[:] = self.reaction_weight()
-        self._e_np = self.e_load.vec.FV().NumPy().copy()
-        self.load = 0.0
         self._lam_ext = 0.0
+        self._build_loads()
 
         # ------------------------------------------------------------ material fields
         regions = mesh.GetMaterials()
@@ -510,16 +506,8 @@ class Solver:
         field on its dofs (a vertex shared by two loads takes the later load's value)."""
         target = np.zeros(self.fes_u.ndof)
         for rec in self._loads:
-            if "mask" not in rec:
-                continue
-            if isinstance(rec["load"], DisplacementLoad):
-                # the uniform load as before fields existed: lambda e on every Dirichlet dof
-                vals = lam * rec["unit"]
-                m = rec["mask"] if len(self._loads) > 1 else self._dir_np
-                target[m] = vals[m]
-            else:
-                m = rec["mask"]
-                target[m] = self.load_values(rec, lam)[m]
+            if "mask" in rec:
+                target[rec["mask"]] = self.load_values(rec, lam)[rec["mask"]]
         return target
 
     def _record_of(self, name: str | None):
@@ -565,8 +553,6 @@ class Solver:
         for rec in self._loads:
             if "f" in rec:
                 out[rec["name"]] = self.load * rec["total"] * self.thickness
-            elif rec["unit"] is not None and rec is self._record_of(None):
-                out[rec["name"]] = float(ngs.InnerProduct(self._r, self.e_load.vec)) * self.thickness
             else:
                 out[rec["name"]] = float(np.dot(rN, self.reaction_weight(rec["name"]))) * self.thickness
         return out
