@@ -120,11 +120,13 @@ def test_rho_gradients_v_curve(path, gradients):
     best = errs.min(axis=0)
     for k, b in zip(names, best):
         assert b <= TOL, f"{k}: best relative FD error {b:.2e}"
-    # V shape: truncation error decreases at least 100x from eps = 1e-2 to the best eps, and the
-    # smallest eps is worse than the best (round-off side of the V)
-    ew = errs[:, names.index("external_work")]
-    assert ew[0] > 100 * ew.min()
-    assert ew[-1] > ew.min()
+    # V shape, on the geometric mean over the objectives (a single objective's round-off error is
+    # a random number and can, by chance, be smallest at eps = 1e-8): truncation error decreases
+    # at least 100x from eps = 1e-2 to the best eps, and the smallest eps is worse than the best
+    # (round-off side of the V)
+    gm = np.exp(np.log(errs).mean(axis=1))
+    assert gm[0] > 100 * gm.min()
+    assert gm[-1] > gm.min()
 
 
 @pytest.mark.parametrize("name", ["E", "Gc", "l0", "gamma0", "nu"])
