@@ -40,6 +40,9 @@ from .solver import NewtonResult
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
+import os as _os
+_DEBUG = bool(_os.environ.get("NGTMC_DEBUG_COUPLED"))
+
 #: Linear solvers of the coupled tangent: "block-gmres" (GMRES preconditioned by the block lower
 #: triangle, with sparse Cholesky factors of the symmetric u-u and alpha-alpha blocks; the u-u
 #: factor reuses its symbolic step), "umfpack" or "pardiso" (direct, whole matrix).
@@ -68,6 +71,8 @@ class CoupledNewton:
         self.gmres_tol = float(gmres_tol)
         self.gmres_maxsteps = int(gmres_maxsteps)
         self._inv_u = None
+        self._wf_form = None
+        self.load_solved = None
         self.s = s = solver
         self.alpha_tol = float(alpha_tol)
         self.max_iterations = int(max_iterations)
@@ -127,8 +132,47 @@ class CoupledNewton:
         self.s.u.vec.FV().NumPy()[:] = xN[:self.nu]
         self.s.alpha.vec.FV().NumPy()[:] = xN[self.nu:]
 
+    # ------------------------------------------------------------------ dissipation
+    def dissipation(self, alpha_vec: np.ndarray | None = None) -> float:
+        """Dissipated energy D = W_f / c_w = 1/2 alpha^T M alpha of the phase field (N mm per mm of
+        thickness in 2D, N mm in 3D), M the matrix of int Gc (alpha beta / l0 + l0 grad alpha .
+        grad beta) over the fracture regions; of the solver's alpha, or of ``alpha_vec``."""
+        a = self.s.alpha.vec.FV().NumPy() if alpha_vec is None else alpha_vec
+        self._assemble_wf()
+        return 0.5 * float(a @ self._wf_matvec(a))
+
+    def _assemble_wf(self):
+        key = self.s._design_key() if hasattr(self.s, "_design_key") else None
+        if getattr(self, "_wf_key", object()) == key and self._wf_form is not None:
+            return
+        s = self.s
+        a, b = s.fes_a.TnT()
+        M = ngs.BilinearForm(s.fes_a, symmetric=True)
+        M += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(
+            definedon=s.mesh.Materials(s._frac_re))
+        M.Assemble()
+        self._wf_form = M
+        self._wf_key = key
+        self._wf_x = M.mat.CreateColVector()
+        self._wf_y = M.mat.CreateColVector()
+
+    def _wf_matvec(self, a: np.ndarray) -> np.ndarray:
+        """M a: the gradient dD/dalpha (N mm per unit alpha, per thickness in 2D)."""
+        self._wf_x.FV().NumPy()[:] = a
+        self._wf_y.data = self._wf_form.mat * self._wf_x
+        return self._wf_y.FV().NumPy().copy()
+
+    def reference_toughness(self) -> float:
+        """Mean Gc over the fracture regions, N/mm (for converting a crack advance into a
+        dissipation increment)."""
+        s = self.s
+        frac = s.mesh.Materials(s._frac_re)
+        area = ngs.Integrate(ngs.CoefficientFunction(1.0), s.mesh, definedon=frac)
+        return float(ngs.Integrate(s.Gc, s.mesh, definedon=frac)) / float(area)
+
     # ------------------------------------------------------------------ solve
-    def solve(self, load: float, alpha_upper: np.ndarray | None = None) -> NewtonResult:
+    def solve(self, load: float, alpha_upper: np.ndarray | None = None, dissipation: float | None = None,
+              load_bounds: tuple[float, float] | None = None) -> NewtonResult:
         """Solve step ``load`` (imposed displacement, mm) from the current (u, alpha).
 
         ``alpha_upper``: upper bounds of alpha per dof (default 1). A bound below 1 caps the damage
@@ -136,7 +180,17 @@ class CoupledNewton:
         after a converged solve, :attr:`cap_binding` tells whether a cap below 1 is active (the
         crack wants to grow further at this load). On success the solver holds the converged u and
         alpha (H not committed). On failure it holds the last iterate; the caller restores its
-        saved state."""
+        saved state.
+
+        ``dissipation`` (N mm per mm of thickness in 2D): path following. The load becomes an
+        unknown, and the step is closed by the constraint D(alpha) - D(alpha_{n-1}) =
+        ``dissipation`` (dissipation control, D of :meth:`dissipation`); ``load`` is the first
+        guess, and the current u must hold the boundary values of ``load``. Each Newton step is
+        the bordered solution of the linearised equations: two solves with one factorization,
+        x = a + dlambda b, with b the response to a unit load change, and dlambda from the
+        linearised constraint. The converged load is :attr:`load_solved` (mm); it may be below
+        the load of the last step (a snap-back). ``load_bounds`` (mm): the load must stay in this
+        interval (else the solve fails)."""
         s = self.s
         tm = s.timings
         nu = self.nu
@@ -148,9 +202,20 @@ class CoupledNewton:
         a_low = s.alpha_committed
         a_up = np.ones_like(a_low) if alpha_upper is None else np.maximum(np.minimum(alpha_upper, 1.0), a_low)
         self.cap_binding = False
+        self.load_out_of_bounds = None
         c = self._ncp_scale
         dir_u = s._dir_np
-        target = s.dirichlet_target(load)
+        path = dissipation is not None
+        lam = float(load)
+        if path:
+            if not dissipation > 0:
+                raise ValueError(f"dissipation = {dissipation!r} N mm must be > 0")
+            self._assemble_wf()
+            d_target = self.dissipation(a_low) + float(dissipation)
+            scale_g = float(dissipation)
+            lam_lo, lam_hi = load_bounds if load_bounds is not None else (-math.inf, math.inf)
+            xN[:nu][dir_u] = s.dirichlet_target(lam)[dir_u]
+        target = s.dirichlet_target(lam)
         free_u = ~dir_u & self._free_base[:nu]
         solve_time = assembly_time = 0.0
         r_ref = 0.0
@@ -168,31 +233,43 @@ class CoupledNewton:
             held[(held != 0) & (phi == c * ra)] = 0
             return float(np.linalg.norm(rv[:nu][free_u])), float(np.linalg.norm(phi / c)), held
 
+        def constraint(xv):
+            return 0.5 * float(xv[nu:] @ self._wf_matvec(xv[nu:])) - d_target if path else 0.0
+
+        def failed(it, message):
+            self._scatter()
+            return NewtonResult(False, it, res_u, solve_time, assembly_time, 0, message)
+
         for it in range(1, self.max_iterations + 1):
             t0 = time.perf_counter()
             self.form.Apply(x, r)
             tm["residual"] += time.perf_counter() - t0
             if not np.all(np.isfinite(rN)):
-                self._scatter()
-                return NewtonResult(False, it, math.nan, solve_time, assembly_time, 0, "residual is not finite")
+                return failed(it, "residual is not finite")
             rem = np.where(dir_u, target - xN[:nu], 0.0)
-            lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
+            lifted = (not path) and bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(lam))))
             res_u, res_a, held = split(xN, rN)
+            g = constraint(xN)
             reac = float(np.linalg.norm(rN[:nu][dir_u]))
+            if _DEBUG:
+                print(f"    coupled it {it} lam {lam:.8g} res_u {res_u:.3e} (ref {max(reac, r_ref):.3e}) res_a {res_a:.3e} "
+                      f"(tol {tol_a:.3e}) g {g:.3e} held {int(np.sum(held == -1))}/{int(np.sum(held == 1))}", flush=True)
             if not lifted:
                 if r_ref == 0.0:
                     r_ref = res_u
-                if res_u <= s.newton.rtol * max(reac, r_ref) + s.newton.atol and res_a <= tol_a:
+                if (res_u <= s.newton.rtol * max(reac, r_ref) + s.newton.atol and res_a <= tol_a
+                        and (not path or abs(g) <= 1e-6 * scale_g)):
                     np.clip(xN[nu:], a_low, a_up, out=xN[nu:])  # held dofs sit on their bound to round-off
                     self._scatter()
-                    s.load = load
+                    s.load = lam
+                    self.load_solved = lam
                     self.cap_binding = bool(np.any((held == 1) & (a_up < 1.0 - 1e-12)))
                     return NewtonResult(True, it - 1, res_u, solve_time, assembly_time, 0)
             # merit: each residual relative to its natural scale (units differ: N and N mm): the
-            # reaction force of the step, and the residual of a uniform unit alpha
+            # reaction force of the step, the residual of a uniform unit alpha, the dissipation step
             scale_u = max(reac, r_ref, s.newton.atol)
             scale_a = self.alpha_residual_scale
-            merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2
+            merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2 + ((g / scale_g) ** 2 if path else 0.0)
             # semi-smooth Newton step: held alpha dofs move onto their bound, the others and the
             # free u dofs solve the linearised equations; the Dirichlet remainder is carried
             t0 = time.perf_counter()
@@ -200,6 +277,12 @@ class CoupledNewton:
             dt = time.perf_counter() - t0
             assembly_time += dt
             tm["assembly"] += dt
+            # complementarity scale from the tangent's own diagonal: c R_alpha is then the Jacobi
+            # estimate of the dof's Newton step (with c from the (Gc/l0) mass only, the notch tip,
+            # where 2 H >> Gc/l0, was put on alpha = 1 and released again, step after step)
+            c = self._ncp_scale = self._diagonal_scale()
+            res_u, res_a, held = split(xN, rN)
+            merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2 + ((g / scale_g) ** 2 if path else 0.0)
             free = self._free_base.copy()
             free[nu:] &= held == 0
             a_cur = xN[nu:]
@@ -209,14 +292,28 @@ class CoupledNewton:
             fixed_step = wN.copy()
             tmp.data = r + self.form.mat * w
             t0 = time.perf_counter()
-            if self.linear_solver == "block-gmres":
-                t1 = self._solve_block(free, tmp, dx, t0)
-            else:
-                inv = self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
-                t1 = time.perf_counter()
-                dx.data = inv * tmp
+            lin = self._factorize(free)
+            t1 = time.perf_counter()
+            lin(tmp, dx)
             dxN = dx.FV().NumPy()
             dxN[:] = np.where(free, -dxN, fixed_step)
+            dlam = 0.0
+            if path:
+                # response to a unit load change: the boundary values move by d target / d lambda
+                h = 1e-6 * max(abs(lam), 1e-3)
+                dt_dl = (s.dirichlet_target(lam + h) - s.dirichlet_target(lam - h)) / (2 * h)
+                wN[:] = 0.0
+                wN[:nu] = np.where(dir_u, dt_dl, 0.0)
+                unit = wN.copy()
+                tmp.data = self.form.mat * w
+                lin(tmp, w)
+                bN = np.where(free, -w.FV().NumPy(), unit)
+                grad = self._wf_matvec(a_cur)
+                slope = float(grad @ bN[nu:])
+                if not abs(slope) > 0.0:
+                    return failed(it, "dissipation control: the damage does not respond to the load here")
+                dlam = -(g + float(grad @ dxN[nu:])) / slope
+                dxN += dlam * bN
             t2 = time.perf_counter()
             tm["factorization"] += t1 - t0
             tm["solve"] += t2 - t1
@@ -224,10 +321,15 @@ class CoupledNewton:
             # backtracking on the merit function, guard J > 0 and finite residual
             t0 = time.perf_counter()
             x0.data = x
+            lam0 = lam
             step = 1.0
             accepted = False
             for _ in range(s.newton.max_line_search):
                 xN[:] = x0.FV().NumPy() + step * dxN
+                lam = lam0 + step * dlam
+                if path:
+                    target = s.dirichlet_target(lam)
+                    xN[:nu][dir_u] = target[dir_u]
                 s.u.vec.FV().NumPy()[:] = xN[:nu]
                 if s.min_J() > 0.0:
                     self.form.Apply(x, tmp)
@@ -237,7 +339,7 @@ class CoupledNewton:
                             accepted = True
                             break
                         rmu, rma, _ = split(xN, tN)
-                        merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2
+                        merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2 + ((constraint(xN) / scale_g) ** 2 if path else 0.0)
                         if merit <= (1.0 - 1e-4 * step) * merit0:
                             accepted = True
                             break
@@ -245,17 +347,37 @@ class CoupledNewton:
             tm["line_search"] += time.perf_counter() - t0
             if not accepted:
                 xN[:] = x0.FV().NumPy()
-                self._scatter()
-                return NewtonResult(False, it, res_u, solve_time, assembly_time, 0,
-                                    "coupled line search failed" if not lifted else "no admissible step towards the boundary values")
-        self._scatter()
-        return NewtonResult(False, self.max_iterations, res_u, solve_time, assembly_time, 0,
-                            f"coupled Newton: no convergence in {self.max_iterations} iterations (residual {res_u:.3e} N)")
+                return failed(it, "coupled line search failed" if not lifted else "no admissible step towards the boundary values")
+            if path and not (lam_lo <= lam <= lam_hi):
+                self.load_out_of_bounds = lam
+                return failed(it, f"dissipation control: the load {lam:.6g} mm left [{lam_lo:.6g}, {lam_hi:.6g}] mm")
+        return failed(self.max_iterations, f"coupled Newton: no convergence in {self.max_iterations} iterations (residual {res_u:.3e} N)")
 
-    def _solve_block(self, free: np.ndarray, rhs, out, t0: float) -> float:
-        """out = A^-1 rhs on the ``free`` dofs by GMRES with the block lower-triangular
-        preconditioner [K_uu 0; K_au K_aa]; returns the time at which the factorizations ended.
-        Falls back to UMFPACK when GMRES does not reach ``gmres_tol`` in ``gmres_maxsteps``."""
+    def _diagonal_scale(self) -> np.ndarray:
+        """1 / diagonal of the assembled tangent's alpha-alpha block (per unit of R_alpha)."""
+        import scipy.sparse as sp
+        A = self.form.mat
+        d = sp.csr_matrix(A.CSR(), shape=(A.height, A.width)).diagonal()[self.nu:]
+        d = np.where(d > 0, d, np.nan)
+        floor = 1e-12 * np.nanmax(d) if np.any(np.isfinite(d)) else 1.0
+        return 1.0 / np.where(np.isfinite(d), np.maximum(d, floor), floor)
+
+    def _factorize(self, free: np.ndarray):
+        """Factorize the assembled tangent on the ``free`` dofs; returns solve(rhs, out), out = A^-1
+        rhs on the free dofs (any number of right-hand sides with one factorization)."""
+        if self.linear_solver == "block-gmres":
+            return self._block_solver(free)
+        inv = self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
+
+        def solve(rhs, out):
+            out.data = inv * rhs
+        return solve
+
+    def _block_solver(self, free: np.ndarray):
+        """GMRES with the block lower-triangular preconditioner [K_uu 0; K_au K_aa], with sparse
+        Cholesky factors of the symmetric u-u and alpha-alpha blocks (the u-u factor reuses its
+        symbolic step). Falls back to UMFPACK when GMRES does not reach ``gmres_tol`` in
+        ``gmres_maxsteps``."""
         from ngsolve.krylovspace import GMRes
         A = self.form.mat
         nu = self.nu
@@ -268,19 +390,24 @@ class CoupledNewton:
         fa = free.copy()
         fa[:nu] = False
         inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
-        t1 = time.perf_counter()
         op = _Masked(A, free)
         pre = _BlockLower(A, self._inv_u, inv_a)
-        rhsN = rhs.FV().NumPy()
-        rhsN[~free] = 0.0
-        sol = GMRes(op, rhs, pre=pre, tol=self.gmres_tol, maxsteps=self.gmres_maxsteps, printrates=False)
-        check = rhs.CreateVector()
-        check.data = op * sol
-        if np.linalg.norm(check.FV().NumPy() - rhsN) > 1e-6 * max(np.linalg.norm(rhsN), 1e-300):
-            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
-            sol.data = inv * rhs
-        out.data = sol
-        return t1
+        direct = []
+
+        def solve(rhs, out):
+            rhsN = rhs.FV().NumPy()
+            rhsN[~free] = 0.0
+            if direct:
+                out.data = direct[0] * rhs
+                return
+            sol = GMRes(op, rhs, pre=pre, tol=self.gmres_tol, maxsteps=self.gmres_maxsteps, printrates=False)
+            check = rhs.CreateVector()
+            check.data = op * sol
+            if np.linalg.norm(check.FV().NumPy() - rhsN) > 1e-6 * max(np.linalg.norm(rhsN), 1e-300):
+                direct.append(A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack"))
+                sol.data = direct[0] * rhs
+            out.data = sol
+        return solve
 
 
 class _SquareOperator(ngs.BaseMatrix):

@@ -150,9 +150,19 @@ class Simulation:
             raise ValueError(f"coupled fallback = {self.fallback!r} is not one of 'single-pass', 'staggered', 'capped'")
         self.damage_cap = float(copt.pop("damage_cap", 0.25))
         self.max_substeps = int(copt.pop("max_substeps", 200))
+        self.path = copt.pop("path", None)
+        if self.path not in (None, "dissipation"):
+            raise ValueError(f"coupled path = {self.path!r} is not one of None (load control), 'dissipation'")
+        self.crack_advance = copt.pop("crack_advance", None)
+        if self.crack_advance is not None and not (float(self.crack_advance) > 0):
+            raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
         if scheme == "monolithic" and self.solver.alpha is not None:
             from .coupled import CoupledNewton
             self.coupled = CoupledNewton(self.solver, **copt)
+        self._path = None
+        if self.coupled is not None and self.path == "dissipation":
+            from .path import DissipationPath
+            self._path = DissipationPath(self, self.crack_advance)
         self.t = 0.0
         self.step = 0
         self.rows: list[dict] = []
@@ -220,6 +230,8 @@ class Simulation:
     def _attempt(self, t_new: float):
         """Try the step to pseudo-time t_new. Returns (ok, info dict)."""
         load = self.schedule.load(t_new)
+        if self._path is not None:
+            return self._path.attempt(t_new)
         if self.coupled is not None:
             return self._attempt_monolithic(load)
         return self._passes(load, 1 if self.scheme == "single-pass" else self.max_staggered)
@@ -375,7 +387,8 @@ class Simulation:
         s = self.solver
         ctrl = self.control
         t_turn = self.schedule.next_turning_time(self.t)
-        du = ctrl.proposal(self.last_delta_wf, self.control_state)
+        # under dissipation control the dissipation per step is bounded by the path, not by Eq. 20
+        du = ctrl.proposal(0.0 if self._path is not None else self.last_delta_wf, self.control_state)
         saved = s.get_state()
         cutbacks = 0
         totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
@@ -388,6 +401,7 @@ class Simulation:
             for k in totals:
                 totals[k] += info[k]
             if ok:
+                t_new = info.get("t_new", t_new)  # path following solves for the load
                 break
             s.set_state(saved)
             cutbacks += 1
@@ -402,7 +416,7 @@ class Simulation:
                     msg = peak + " " + msg
                 raise StepFailure(msg, self.history, saved)
             du = smaller
-        step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new > self.t else 0.0
+        step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new != self.t else 0.0
         if s.alpha is not None:
             s.update_history(info["H_trial"])
         self.t = t_new
@@ -413,6 +427,8 @@ class Simulation:
         wf = s.fracture_energy_per_thickness()
         self.last_delta_wf = wf - self._wf_prev
         self._wf_prev = wf
+        if self._path is not None:
+            self._path.accepted(step_size)
         self._report_progress(row)
         return row
 

@@ -1,0 +1,168 @@
+"""Path following for the monolithic scheme: dissipation control where the crack grows.
+
+Under displacement control a crack that runs unstably has no equilibrium near the last one at
+the next load (a snap-back), so a fixed-load Newton fails there, and the alternating schemes
+carry the crack about one element per pass. Under dissipation control (Gutierrez 2004; May,
+Vignollet and de Borst 2016 for phase fields) the load is an unknown, and a step is closed by
+prescribing how much energy it dissipates:
+
+    D(alpha) - D(alpha_{n-1}) = dD,        D = int Gc (alpha^2 / l0 + l0 |grad alpha|^2) / c_w
+
+(N mm per mm of thickness in 2D), so that the step advances the crack by about
+``crack_advance = dD / Gc`` (mm) whatever the load does, and the load may fall back along a
+snap-back.
+
+The rule of a step, for the step size du (mm) that the step control proposes (Eq. 20 is not
+applied: it bounds the dissipation per step, which the path now does itself):
+
+1. Predict the dissipation of a displacement step from the rate dD / d(load) of the last step.
+   If it stays below dD, take a displacement step (the coupled Newton at fixed load); accept it if
+   it dissipated at most 2 dD.
+2. Otherwise, or if that step failed or dissipated more, take a dissipation step: a predictor at
+   the load where the rate says dD is reached, then the coupled Newton with the load as unknown
+   (:meth:`ngtmc.coupled.CoupledNewton.solve` with ``dissipation``). Its load must stay on the
+   current segment of the schedule; if it would pass the segment's end, the step is a
+   displacement step to that end.
+
+dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a failed step and
+doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
+regions, N/mm).
+
+Units: mm, N, MPa; D per mm of thickness in 2D.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["DissipationPath"]
+
+
+class DissipationPath:
+    """Step rule of the path-following monolithic scheme (module docstring) for a
+    :class:`ngtmc.simulation.Simulation`.
+
+    Parameters
+    ----------
+    sim : Simulation
+        With ``scheme="monolithic"`` on a scene with fracture regions.
+    crack_advance : float, optional
+        Crack advance per dissipation step, mm (default: the mean l0 of the fracture regions).
+    """
+
+    def __init__(self, sim, crack_advance: float | None = None):
+        self.sim = sim
+        self.coupled = c = sim.coupled
+        s = sim.solver
+        if crack_advance is None:
+            import ngsolve as ngs
+            frac = s.mesh.Materials(s._frac_re)
+            area = float(ngs.Integrate(ngs.CoefficientFunction(1.0), s.mesh, definedon=frac))
+            crack_advance = float(ngs.Integrate(s.l0, s.mesh, definedon=frac)) / area
+        self.crack_advance = float(crack_advance)
+        self.gc_ref = c.reference_toughness()
+        #: dD / d(load) of the last accepted step, N mm per mm of load (per thickness in 2D)
+        self.rate = 0.0
+        self.d_prev = c.dissipation()
+        #: accepted steps taken under dissipation control
+        self.dissipation_steps = 0
+
+    @property
+    def target(self) -> float:
+        """Dissipation per step dD, N mm (per mm of thickness in 2D), at the current scale."""
+        return self.gc_ref * self.crack_advance * self.sim.control_state.scale
+
+    def _segment(self):
+        """(t_start, t_end) of the schedule segment the simulation is on."""
+        sch = self.sim.schedule
+        t = self.sim.t
+        t_end = sch.next_turning_time(t)
+        i = int(np.searchsorted(sch.times, t_end)) - 1
+        return float(sch.times[max(i, 0)]), t_end
+
+    def _time_of(self, load: float, t0: float, t1: float) -> float:
+        sch = self.sim.schedule
+        l0, l1 = sch.load(t0), sch.load(t1)
+        return t0 + (load - l0) / (l1 - l0) * (t1 - t0)
+
+    def attempt(self, t_new: float):
+        """One attempt of a step towards pseudo-time ``t_new`` (the step control's proposal);
+        returns (ok, info) as :meth:`Simulation._attempt`, with ``info["t_new"]`` the pseudo-time
+        reached (may be below ``t_new``, or below the last step's after a snap-back)."""
+        sim, s = self.sim, self.sim.solver
+        sch = sim.schedule
+        load_n = sch.load(sim.t)
+        dD = self.target
+        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
+                "projected": 0}
+        saved = s.get_state()
+        du = abs(sch.load(t_new) - load_n)
+        if self.rate * du <= dD:
+            ok, info = self._fixed(sch.load(t_new), info)
+            if ok and self.coupled.dissipation() - self.d_prev <= 2.0 * dD:
+                info["t_new"] = t_new
+                return True, info
+            s.set_state(saved)
+        t0, t1 = self._segment()
+        l_a, l_b = sch.load(t0), sch.load(t1)
+        direction = 1.0 if l_b > l_a else -1.0
+        guess = du if self.rate <= 0 else min(du, dD / self.rate)
+        load_guess = load_n + direction * guess
+        res = s.solve_displacement(load_guess)
+        sim._add(info, res)
+        if not res.converged:
+            info["message"] = res.message
+            return False, info
+        keep = s.get_state()
+        lo, hi = min(l_a, l_b), max(l_a, l_b)
+        r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
+        sim._add(info, r)
+        if r.converged:
+            H_trial = s.trial_history()
+            if np.all(np.isfinite(H_trial)):
+                info["H_trial"] = H_trial
+                info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
+                self.dissipation_steps += 1
+                return True, info
+            r.message = "history not finite (J <= 0 at a history point)"
+        s.set_state(keep)
+        out = self.coupled.load_out_of_bounds
+        past_end = out is not None and direction * (out - l_b) > 0
+        if past_end:
+            # the dissipation dD is not reached on this segment: a displacement step to its end
+            s.set_state(saved)
+            ok, info = self._fixed(l_b, info)
+            if ok:
+                info["t_new"] = t1
+            return ok, info
+        info["message"] = f"dissipation step of {dD:.4g} N mm: {r.message}"
+        return False, info
+
+    def _fixed(self, load: float, info: dict):
+        """Displacement step: the u predictor with alpha_{n-1}, then the coupled Newton at ``load``."""
+        sim, s = self.sim, self.sim.solver
+        res = s.solve_displacement(load)
+        sim._add(info, res)
+        if not res.converged:
+            info["message"] = res.message
+            return False, info
+        return sim._coupled_newton(load, info)
+
+    def accepted(self, step_size: float):
+        """After an accepted step of |load change| ``step_size`` (mm): update the rate dD/d(load)."""
+        d = self.coupled.dissipation()
+        delta = d - self.d_prev
+        self.d_prev = d
+        if step_size > 0:
+            self.rate = max(delta, 0.0) / step_size
+        else:
+            self.rate = math.inf if delta > 0 else self.rate
+
+    def get_state(self) -> dict:
+        return {"rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps}
+
+    def set_state(self, st: dict):
+        self.rate = float(st["rate"])
+        self.d_prev = float(st["d_prev"])
+        self.dissipation_steps = int(st["dissipation_steps"])
