@@ -484,7 +484,8 @@ class Simulation:
         """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows."""
         return {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
                 "control": self.control_state.as_dict(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
-                "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows]}
+                "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows],
+                **({"path": self._path.get_state()} if self._path is not None else {})}
 
     def set_state(self, st: dict):
         """Resume from a state of :meth:`get_state`."""
@@ -497,6 +498,11 @@ class Simulation:
         self._elapsed_before = float(st["elapsed"])
         self._t_start = None
         self.rows = [dict(r) for r in st["rows"]]
+        if self._path is not None:
+            if "path" in st:
+                self._path.set_state(st["path"])
+            else:  # a state of a run without path following: start the rule from this state
+                self._path.d_prev = self.coupled.dissipation()
 
 
 def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
