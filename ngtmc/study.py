@@ -114,11 +114,11 @@ def normalise_name(name: str) -> str:
 #:     [project.entry-points."ngtmc.studies"]
 #:     my_study = "my_package.my_study"
 STUDIES = {
-    "contact_gamma0": "studies.contact_gamma0",
-    "design_for_contact": "studies.design_for_contact",
-    "l_panel": "studies.l_panel",
-    "step_control": "studies.step_control",
-    "three_point_bending": "studies.three_point_bending",
+    "contact_gamma0": "ngtmc.studies.contact_gamma0",
+    "design_for_contact": "ngtmc.studies.design_for_contact",
+    "l_panel": "ngtmc.studies.l_panel",
+    "step_control": "ngtmc.studies.step_control",
+    "three_point_bending": "ngtmc.studies.three_point_bending",
 }
 
 #: Entry-point group through which other packages register studies (name -> module).

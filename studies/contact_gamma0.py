@@ -297,3 +297,10 @@ def compare(histories: dict, p: dict) -> dict:
                      "final_force": f_final, "post_contact_diff": (f_final - f_ref_final) / f_ref_final,
                      "post_contact_max_diff": float(np.max(np.abs(diff))) / f_ref_final}
     return out
+
+
+if __name__ == "__main__":  # python studies/contact_gamma0.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

@@ -378,3 +378,10 @@ def phases(hist, p: dict, settle: float = 0.25) -> dict:
                     "final_force": float(reload["force"].iloc[-1]),
                     "wf_final": float(reload["fracture_energy"].iloc[-1])})
     return out
+
+
+if __name__ == "__main__":  # python studies/l_panel.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

@@ -73,7 +73,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from studies import three_point_bending as tpb
+from ngtmc.studies import three_point_bending as tpb
 
 NAME = "step_control"
 TITLE = "Step control: influence of k_u and du_max (three-point bending)"
@@ -162,3 +162,10 @@ def post_results(p: dict, history, results: dict) -> dict:
         if r0.get("wall_time_s") and r.get("wall_time_s"):
             r["wall_time_ratio"] = r["wall_time_s"] / r0["wall_time_s"]
     return results
+
+
+if __name__ == "__main__":  # python studies/step_control.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

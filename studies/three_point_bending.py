@@ -157,7 +157,7 @@ import numpy as np
 import ngtmc
 from ngtmc.study import SOLVER_PARAMETERS, Case, StudyError, simulation_options
 
-from studies import _tpb_geometry as _geometry
+from ngtmc.studies import _tpb_geometry as _geometry
 
 NAME = "three_point_bending"
 TITLE = "Three-point bending with an indenter"
@@ -415,3 +415,10 @@ def post_results(p: dict, history, results: dict) -> dict:
         if len(mono) > 1 and mono["load"].max() >= gap:
             r["force_at_gap"] = float(np.interp(gap, mono["load"], mono["force"]))
     return results
+
+
+if __name__ == "__main__":  # python studies/three_point_bending.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

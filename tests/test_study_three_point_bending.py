@@ -19,7 +19,7 @@ import pytest
 
 import ngtmc
 from ngtmc.study import load_study, study_parameters
-from studies import three_point_bending as tpb
+from ngtmc.studies import three_point_bending as tpb
 
 STOP = 0.1025  # mm, see the module docstring
 
