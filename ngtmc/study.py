@@ -7,7 +7,8 @@ a package for them.
 A named study is one literate module, e.g. ``studies/<name>.py`` (``docs/study-interface.md``), that
 defines ``NAME``, ``TITLE``, ``SUMMARY``, ``PARAMETERS`` (physics: name -> (value, unit,
 description)), ``RESOLUTIONS`` (mesh and step sizes only; at least ``quick``, ``medium``,
-``paper``), ``DEFAULT_RESOLUTION``, ``cases(p)``, ``references(p)`` and ``targets(p)``.
+``paper``), ``DEFAULT_RESOLUTION``, ``cases(p)``, ``references(p)`` and ``targets(p)``; the studies of
+ngtmc also keep ``EXPECTED``, the numbers their quick run is checked against.
 
 >>> from ngtmc.study import list_studies, load_study
 >>> "three_point_bending" in list_studies()         # doctest: +SKIP

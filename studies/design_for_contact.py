@@ -200,6 +200,10 @@ def targets(p: dict) -> list[dict]:
     return []
 
 
+#: Numbers the quick run is checked against (docs/study-interface.md): none, an optimisation demo: no published or measured reference numbers.
+EXPECTED: dict = {}
+
+
 # ---------------------------------------------------------------------------- optimisation
 def _pad_mask(mesh) -> np.ndarray:
     mats = mesh.GetMaterials()

@@ -144,6 +144,10 @@ def targets(p: dict) -> list[dict]:
     return []
 
 
+#: Numbers the quick run is checked against (docs/study-interface.md): none, no published numbers for these runs; the tests compare the cases with each other.
+EXPECTED: dict = {}
+
+
 def post_results(p: dict, history, results: dict) -> dict:
     """Add per case: peak-force error and peak-load error against the reference case, step and
     time ratios. Called by the runner with the history DataFrame and its per-case results."""
