@@ -18,8 +18,8 @@ solve times aside). A resume takes the recorded overrides and refuses other ones
 unreadable checkpoint (named in a warning) for the older generation, and never rewrites the rows
 of a completed case (see :mod:`ngtmc.runfiles`).
 
-The per-step outputs (snapshots and VTK, checkpoints, progress, user callbacks) are the plugins
-of :mod:`ngtmc.plugins`, passed to ``Simulation.run(callbacks=...)``. A user's own scene goes
+The outputs (snapshots and VTK, checkpoints, progress, user callbacks, the report) are the plugins
+of :mod:`ngtmc.plugins`, on the accepted steps that ``Simulation.steps()`` yields. A user's own scene goes
 through the same run: :func:`run_scene` (``ngtmc.simulate(..., out_dir=...)``) wraps it in a
 one-case study (:func:`scene_study`).
 
@@ -48,7 +48,7 @@ from .runfiles import (HISTORY_UNITS, SCHEMA_VERSION, UNITS, CheckpointStore, ef
                        git_revision, parameter_table, physics_hash, run_description, versions,
                        parameters_hash, process_info, read_metadata, resume_parameters, typed_overrides,
                        write_atomic, write_json, write_npz)
-from .plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput, force_unit
+from .plugins import CheckpointOutput, Progress, ReportOutput, RowCallbacks, SnapshotOutput, force_unit
 from .scene import _names
 from .snapshots import Snapshots
 from .study import Case, StudyError, load_study, normalise_name, study_parameters
@@ -456,6 +456,8 @@ class _Run:
         last = checkpoints     # .state: the state of the last accepted step
 
         def finish(status, error=None):
+            for plugin in plugins:
+                plugin.finish(status)
             state = last.state
             self.rows[case.name] = [dict(r) for r in state["rows"]]
             res = case_results(pd.DataFrame(self.rows[case.name]))
@@ -471,7 +473,9 @@ class _Run:
             self.save_checkpoint(case, state, snaps, done=(status == "completed"))
 
         try:
-            sim.run(callbacks=plugins)
+            for row in sim.steps():       # the accepted steps, each through the case's plugins
+                for plugin in plugins:
+                    plugin(sim, row)
         except StepFailure as e:
             finish("failed", str(e))
             raise
@@ -625,17 +629,19 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
+    # outputs of the whole run (those of each case: _Run.run_case)
+    outputs = [ReportOutput(out, strict=bool(report))] if (report or report is None) else []
     try:
         with _terminate_as_interrupt(), ngs.TaskManager():
             run.run(resume, meta)
     except BaseException:
         # a failed or interrupted run still gets its report (with a status banner): nothing is lost
-        if report or report is None:
-            _render(out, strict=False)
+        for plugin in outputs:
+            plugin.finish("interrupted" if run.status == "interrupted" else "failed")
         raise
     run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
-    if report or report is None:
-        _render(out, strict=bool(report))
+    for plugin in outputs:
+        plugin.finish(run.status)
     return run
 
 
@@ -661,24 +667,6 @@ class _terminate_as_interrupt:
             import signal
             signal.signal(signal.SIGTERM, self.old)
         return False
-
-
-def _render(out: Path, strict: bool):
-    try:
-        from .report import render_report
-    except ImportError as e:
-        msg = f"report not rendered: ngtmc.report.render_report is not available ({e})"
-        if strict:
-            raise RuntimeError(msg) from e
-        print(f"[ngtmc] {msg}", file=sys.stderr)
-        return None
-    try:
-        return render_report(out)
-    except Exception as e:
-        if strict:
-            raise
-        print(f"[ngtmc] report not rendered: {type(e).__name__}: {e}", file=sys.stderr)
-        return None
 
 
 # ====================================================================== a user's own scene
