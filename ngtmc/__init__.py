@@ -11,11 +11,39 @@ for the scene's thickness in mm.
 Model: Ciceri, Aveline, Thillaithevan, Hewson, Santer, "A differentiable variational model for
 structural self-contact and fracture", Engineering with Computers (2026).
 """
-from .materials import Material
-from .scene import DisplacementField, DisplacementLoad, Point, Regulariser, ResolutionWarning, Scene, Support, Traction
-from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate
-from .solver import NewtonOptions, Solver
-from .stepping import AdaptiveStepControl, Schedule
+import importlib.util as _importlib_util
+from pathlib import Path as _Path
+import sys as _sys
+
+
+class _SourceTreeStudies:
+    """Finds the subpackage ``ngtmc.studies`` in the folder ``studies/`` beside this package.
+
+    The studies live in ``studies/`` at the top of the repository and install as ``ngtmc.studies``
+    (``package-dir`` in pyproject.toml). A wheel holds them in ``ngtmc/studies``; a source tree
+    (run with ``PYTHONPATH=<tree>`` or installed editable) has them beside ``ngtmc/``, and this
+    finder imports them from there, from the same tree as the ``ngtmc`` being imported."""
+
+    folder = _Path(__file__).resolve().parent.parent / "studies"
+
+    @classmethod
+    def find_spec(cls, fullname, path=None, target=None):
+        if fullname != "ngtmc.studies":
+            return None
+        return _importlib_util.spec_from_file_location(fullname, cls.folder / "__init__.py",
+                                                       submodule_search_locations=[str(cls.folder)])
+
+
+if (not (_Path(__file__).resolve().parent / "studies").is_dir()
+        and (_SourceTreeStudies.folder / "__init__.py").is_file()
+        and _SourceTreeStudies not in _sys.meta_path):
+    _sys.meta_path.insert(0, _SourceTreeStudies)
+
+from .materials import Material  # noqa: E402
+from .scene import DisplacementField, DisplacementLoad, Point, Regulariser, ResolutionWarning, Scene, Support, Traction  # noqa: E402
+from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate  # noqa: E402
+from .solver import NewtonOptions, Solver  # noqa: E402
+from .stepping import AdaptiveStepControl, Schedule  # noqa: E402
 
 __version__ = "0.1.0"
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-__all__ = ["main", "build_parser", "parse_overrides", "show_study"]
+__all__ = ["main", "build_parser", "parse_overrides", "show_study", "run_script"]
 
 
 def parse_overrides(items) -> dict:
@@ -180,6 +180,12 @@ def _cmd_report(args) -> int:
     if path is not None:
         print(path)
     return 0
+
+
+def run_script(name: str, argv=None) -> int:
+    """A study file run as a script: ``python studies/NAME.py [options]`` is ``ngtmc run NAME
+    [options]`` (the options of ``ngtmc run``; ``argv`` defaults to ``sys.argv[1:]``)."""
+    return main(["run", name, *(sys.argv[1:] if argv is None else argv)])
 
 
 def main(argv=None) -> int:

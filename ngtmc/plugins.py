@@ -1,16 +1,18 @@
-"""Per-step outputs of a run as small callback objects ("plugins").
+"""Outputs of a run as small objects ("plugins") on the accepted steps.
 
-A :class:`ngtmc.Simulation` calls every callback as ``f(simulation, row)`` after each accepted
-step (``Simulation.run(callbacks=...)``). The outputs of a run folder are such callbacks, used in
-the same way by a named study (:func:`ngtmc.run_study`) and by a user's own scene
-(``ngtmc.simulate(..., out_dir=...)``):
+:meth:`ngtmc.Simulation.steps` yields the history row of each accepted step; a plugin is called
+as ``plugin(simulation, row)`` on each (``Simulation.run(callbacks=...)`` does the same), and
+``plugin.finish(status)`` once at the end of what it serves ("completed", "failed" or
+"interrupted"). The outputs of a run folder are such plugins, used in the same way by a named
+study (:func:`ngtmc.run_study`) and by a user's own scene (``ngtmc.simulate(..., out_dir=...)``):
 
 * :class:`Progress`: the one progress printer (also behind ``Simulation(progress=True)``): step,
   load (mm), step size (mm), force with its unit, Newton iterations, cut-backs, the share of the
   load path done and an estimate of the time left from the recent pace;
 * :class:`SnapshotOutput`: fields at the chosen loads (``snapshots.npz`` and ``vtk/``);
 * :class:`CheckpointOutput`: a checkpoint and the run's files every so many steps or seconds;
-* :class:`RowCallbacks`: user functions ``f(simulation, row)``, the row carrying its ``case``.
+* :class:`RowCallbacks`: user functions ``f(simulation, row)``, the row carrying its ``case``;
+* :class:`ReportOutput`: ``report.html``, rendered from the run folder when the run ends.
 
 The history itself is the Simulation's list of rows; the run writes it with its checkpoints.
 """
@@ -21,7 +23,7 @@ import sys
 import time
 from typing import Callable, Sequence
 
-__all__ = ["Plugin", "Progress", "SnapshotOutput", "CheckpointOutput", "RowCallbacks", "force_unit"]
+__all__ = ["Plugin", "Progress", "SnapshotOutput", "CheckpointOutput", "RowCallbacks", "ReportOutput", "force_unit"]
 
 
 def force_unit(dim: int, thickness: float | None) -> str:
@@ -33,9 +35,13 @@ def force_unit(dim: int, thickness: float | None) -> str:
 
 
 class Plugin:
-    """Base of the per-step outputs: ``step(sim, row)`` after every accepted step."""
+    """Base of the outputs: ``step(sim, row)`` after every accepted step, ``finish(status)`` at the
+    end ("completed", "failed" or "interrupted")."""
 
     def step(self, sim, row: dict):  # pragma: no cover - overridden
+        pass
+
+    def finish(self, status: str):
         pass
 
     def __call__(self, sim, row: dict):
@@ -155,3 +161,34 @@ class RowCallbacks(Plugin):
     def step(self, sim, row: dict):
         for f in self.functions:
             f(sim, dict(row, case=self.case))
+
+
+class ReportOutput(Plugin):
+    """``report.html`` of the run folder ``out`` (:func:`ngtmc.report.render_report`), rendered once
+    when the run ends, from the files of the folder; nothing per step. A run that did not complete
+    still gets its report (with a status banner). ``strict``: a report of a completed run that
+    cannot be rendered raises; otherwise, and always for a run that did not complete, the reason is
+    printed on stderr. ``path``: the report, once rendered."""
+
+    def __init__(self, out, strict: bool = False):
+        self.out = out
+        self.strict = bool(strict)
+        self.path = None
+
+    def finish(self, status: str):
+        strict = self.strict and status == "completed"
+        try:
+            from .report import render_report
+        except ImportError as e:
+            msg = f"report not rendered: ngtmc.report.render_report is not available ({e})"
+            if strict:
+                raise RuntimeError(msg) from e
+            print(f"[ngtmc] {msg}", file=sys.stderr)
+            return None
+        try:
+            self.path = render_report(self.out)
+        except Exception as e:
+            if strict:
+                raise
+            print(f"[ngtmc] report not rendered: {type(e).__name__}: {e}", file=sys.stderr)
+        return self.path

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import math
 import sys
 import time
-from typing import Callable, Sequence
+from typing import Callable, Iterator, Sequence
 
 import numpy as np
 import pandas as pd
@@ -458,15 +458,28 @@ class Simulation:
             self._progress.step(self, row)
 
     # ------------------------------------------------------------------ whole run
-    def run(self, callbacks: Sequence[Callable[["Simulation", dict], None]] = ()) -> SimulationResult:
-        """Advance to the end of the schedule. ``callbacks`` are called as f(simulation, row) after
-        every accepted step (snapshots, checkpoints). Raises StepFailure (with the history so far)
-        if a step fails at the minimum increment."""
+    def steps(self) -> Iterator[dict]:
+        """Advance to the end of the schedule, yielding the history row of each accepted step (a
+        dict, units in :attr:`units`) as soon as it is accepted; the simulation's state is then
+        that of the step (fields, :meth:`get_state`, :attr:`finished`)::
+
+            for row in sim.steps():
+                print(row["load"], row["force"])
+
+        Raises StepFailure (with the history so far) if a step fails at the minimum increment, or
+        when ``max_steps`` is reached. A run folder's outputs are plugins on these rows
+        (:mod:`ngtmc.plugins`)."""
         while not self.finished:
             if self.step >= self.max_steps:
                 raise StepFailure(f"max_steps = {self.max_steps} reached at load {self.solver.load:.6g} mm",
                                   self.history, self.solver.get_state())
-            row = self.advance()
+            yield self.advance()
+
+    def run(self, callbacks: Sequence[Callable[["Simulation", dict], None]] = ()) -> SimulationResult:
+        """Advance to the end of the schedule (:meth:`steps`). ``callbacks`` are called as
+        f(simulation, row) after every accepted step (snapshots, checkpoints). Raises StepFailure
+        (with the history so far) if a step fails at the minimum increment."""
+        for row in self.steps():
             for cb in callbacks:
                 cb(self, row)
         return SimulationResult(self.history, self.units, self.solver, self._elapsed())

@@ -7,7 +7,8 @@ a package for them.
 A named study is one literate module, e.g. ``studies/<name>.py`` (``docs/study-interface.md``), that
 defines ``NAME``, ``TITLE``, ``SUMMARY``, ``PARAMETERS`` (physics: name -> (value, unit,
 description)), ``RESOLUTIONS`` (mesh and step sizes only; at least ``quick``, ``medium``,
-``paper``), ``DEFAULT_RESOLUTION``, ``cases(p)``, ``references(p)`` and ``targets(p)``.
+``paper``), ``DEFAULT_RESOLUTION``, ``cases(p)``, ``references(p)`` and ``targets(p)``; the studies of
+ngtmc also keep ``EXPECTED``, the numbers their quick run is checked against.
 
 >>> from ngtmc.study import list_studies, load_study
 >>> "three_point_bending" in list_studies()         # doctest: +SKIP
@@ -114,11 +115,11 @@ def normalise_name(name: str) -> str:
 #:     [project.entry-points."ngtmc.studies"]
 #:     my_study = "my_package.my_study"
 STUDIES = {
-    "contact_gamma0": "studies.contact_gamma0",
-    "design_for_contact": "studies.design_for_contact",
-    "l_panel": "studies.l_panel",
-    "step_control": "studies.step_control",
-    "three_point_bending": "studies.three_point_bending",
+    "contact_gamma0": "ngtmc.studies.contact_gamma0",
+    "design_for_contact": "ngtmc.studies.design_for_contact",
+    "l_panel": "ngtmc.studies.l_panel",
+    "step_control": "ngtmc.studies.step_control",
+    "three_point_bending": "ngtmc.studies.three_point_bending",
 }
 
 #: Entry-point group through which other packages register studies (name -> module).

@@ -271,6 +271,18 @@ def targets(p: dict) -> list[dict]:
 
 
 # ---------------------------------------------------------------------- post-processing
+def post_results(p: dict, history, results: dict) -> dict:
+    """Add to each case's results the numbers of :func:`compare` (forces in N/mm, differences
+    relative to the classical force), when the history holds the classical reference."""
+    if history is None or "case" not in history or "classical" not in set(history["case"]):
+        return results
+    histories = {c: g.sort_values("step") for c, g in history.groupby("case")}
+    for name, numbers in compare(histories, p).items():
+        if name in results:
+            results[name].update(numbers)
+    return results
+
+
 def compare(histories: dict, p: dict) -> dict:
     """Key numbers from the histories ({case name: DataFrame with load, force}).
 
@@ -297,3 +309,37 @@ def compare(histories: dict, p: dict) -> dict:
                      "final_force": f_final, "post_contact_diff": (f_final - f_ref_final) / f_ref_final,
                      "post_contact_max_diff": float(np.max(np.abs(diff))) / f_ref_final}
     return out
+
+
+_DEFAULTS = {k: v[0] for k, v in PARAMETERS.items()}
+#: What the quick run (the CI run of tests/test_study_contact_gamma0.py) is checked against, one
+#: record per number (docs/study-interface.md): the quantity of metadata.json results
+#: (post_results: the numbers of :func:`compare`), the value with its unit, tolerance (rel:
+#: relative, abs: absolute) and source. No published numbers exist for this geometry.
+EXPECTED = {
+    "classical_force_at_probe": {
+        "case": "classical", "quantity": "pre_contact_force", "unit": "N/mm", "rel": 0.02,
+        "value": float(beam_theory(_DEFAULTS, [_DEFAULTS["probe_load"]])[0]),
+        "source": "Euler-Bernoulli beam theory at probe_load = 0.075 mm (beam_theory; small strain, slender: ~1 %)"},
+    "classical_final_force": {
+        "case": "classical", "quantity": "final_force", "unit": "N/mm", "rel": 0.03,
+        "value": float(beam_theory(_DEFAULTS, [_DEFAULTS["final_load"]])[0]),
+        "source": "Euler-Bernoulli beam theory at the final load 0.3 mm (beam_theory, tips in contact)"},
+    "smallest_gamma0_final_force": {
+        "case": case_name(min(_DEFAULTS["gamma0_values"])), "quantity": "post_contact_diff", "value": 0.0,
+        "unit": "-", "abs": 0.01,
+        "source": "the classical penalty-contact case of the same run (relative difference at the final load; "
+                  "measured +0.06 %)"},
+    "smallest_gamma0_post_contact_branch": {
+        "case": case_name(min(_DEFAULTS["gamma0_values"])), "quantity": "post_contact_max_diff", "value": 0.0,
+        "unit": "-", "abs": 0.01,
+        "source": "the classical penalty-contact case of the same run (largest difference from gap + 0.05 mm "
+                  "to the final load, relative to its final force)"},
+}
+
+
+if __name__ == "__main__":  # python studies/contact_gamma0.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

@@ -200,6 +200,10 @@ def targets(p: dict) -> list[dict]:
     return []
 
 
+#: Numbers the quick run is checked against (docs/study-interface.md): none, an optimisation demo: no published or measured reference numbers.
+EXPECTED: dict = {}
+
+
 # ---------------------------------------------------------------------------- optimisation
 def _pad_mask(mesh) -> np.ndarray:
     mats = mesh.GetMaterials()
@@ -462,7 +466,19 @@ def run(out_dir, resolution: str = DEFAULT_RESOLUTION, overrides: dict | None = 
 
 
 if __name__ == "__main__":  # pragma: no cover
-    import sys
+    # python studies/design_for_contact.py [OUT_DIR] [--resolution R] [--set KEY=VALUE] [--no-report]:
+    # the optimisation (`ngtmc run design-for-contact` runs only the initial design)
+    import argparse
 
-    print(run(sys.argv[1] if len(sys.argv) > 1 else "runs/design_for_contact-quick",
-              sys.argv[2] if len(sys.argv) > 2 else DEFAULT_RESOLUTION))
+    from ngtmc.cli import parse_overrides
+    from ngtmc.study import study_parameters
+    ap = argparse.ArgumentParser(prog="python studies/design_for_contact.py", description=TITLE)
+    ap.add_argument("out_dir", nargs="?", default="runs/design_for_contact-quick", help="run folder")
+    ap.add_argument("--resolution", "-r", default=DEFAULT_RESOLUTION, help=", ".join(RESOLUTIONS))
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a parameter (repeatable)")
+    ap.add_argument("--no-report", action="store_true", help="do not render report.html")
+    args = ap.parse_args()
+    given = parse_overrides(args.overrides)
+    _, values = study_parameters(sys.modules[__name__], args.resolution, given)  # typed, or StudyError
+    print(run(args.out_dir, args.resolution, {k: values[k] for k in given}, report=not args.no_report))

@@ -325,7 +325,40 @@ def targets(p: dict) -> list[dict]:
              "source": "Ciceri et al. 2026, L-panel text: reload peak 7.6 kN (whole 100 mm panel)", "tolerance": 0.15}]
 
 
+#: What the quick run (the CI run of tests/test_study_l_panel.py) is checked against, one record per
+#: number (docs/study-interface.md): the quantity of metadata.json results (post_results: the
+#: numbers of :func:`phases`), the value with its unit (N, whole 100 mm panel), tolerance (rel:
+#: relative) and source. The published reload peak is not met (strict expected failure, with the
+#: measured values); the measured quick values guard against regressions.
+EXPECTED = {
+    "reload_peak_force_published": {
+        "case": "main", "quantity": "reload_peak_force", "value": 7600.0, "unit": "N", "rel": 0.15,
+        "source": "Ciceri et al. 2026, L-panel text: reload peak 7.6 kN (whole 100 mm panel)",
+        "xfail": "quick: reload peak measured 23.6 kN against the paper's 7.6 kN (+211 %); medium 20.8 kN "
+                 "(+174 %); without indenter and void (load_introduction='segment') 24.4 kN at quick: not the "
+                 "contact, not the mesh; the AT-2 strength of these parameters is 14.3 MPa (see the study)"},
+    "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
+                         "source": "measured, quick (regression guard; the turning point, 6.3 mm)"},
+    "reload_peak_force": {"case": "main", "quantity": "reload_peak_force", "value": 23621.0, "unit": "N", "rel": 0.05,
+                          "source": "measured, quick (regression guard)"},
+    "force_first_loading_at_gap": {"case": "main", "quantity": "force_first_loading_at_gap", "value": 4765.0,
+                                   "unit": "N", "rel": 0.05, "source": "measured, quick (regression guard)"},
+}
+
+
 # ---------------------------------------------------------------------- post-processing
+def post_results(p: dict, history, results: dict) -> dict:
+    """Add to the results of case ``main`` the numbers of :func:`phases` (forces in N, loads in mm,
+    W_f in N mm), once the history has reached the turning point of the schedule."""
+    if "main" not in results or history is None or not len(history):
+        return results
+    h = history[history["case"] == "main"] if "case" in history else history
+    if not len(h) or not np.isclose(h["load"].to_numpy(dtype=float), effective_schedule(p)[1], atol=1e-9).any():
+        return results
+    results["main"].update(phases(h, p))
+    return results
+
+
 def phases(hist, p: dict, settle: float = 0.25) -> dict:
     """Split a history (DataFrame of one case) into the schedule's phases and return the key numbers.
 
@@ -378,3 +411,10 @@ def phases(hist, p: dict, settle: float = 0.25) -> dict:
                     "final_force": float(reload["force"].iloc[-1]),
                     "wf_final": float(reload["fracture_energy"].iloc[-1])})
     return out
+
+
+if __name__ == "__main__":  # python studies/l_panel.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

@@ -73,7 +73,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from studies import three_point_bending as tpb
+from ngtmc.studies import three_point_bending as tpb
 
 NAME = "step_control"
 TITLE = "Step control: influence of k_u and du_max (three-point bending)"
@@ -144,6 +144,10 @@ def targets(p: dict) -> list[dict]:
     return []
 
 
+#: Numbers the quick run is checked against (docs/study-interface.md): none, no published numbers for these runs; the tests compare the cases with each other.
+EXPECTED: dict = {}
+
+
 def post_results(p: dict, history, results: dict) -> dict:
     """Add per case: peak-force error and peak-load error against the reference case, step and
     time ratios. Called by the runner with the history DataFrame and its per-case results."""
@@ -162,3 +166,10 @@ def post_results(p: dict, history, results: dict) -> dict:
         if r0.get("wall_time_s") and r.get("wall_time_s"):
             r["wall_time_ratio"] = r["wall_time_s"] / r0["wall_time_s"]
     return results
+
+
+if __name__ == "__main__":  # python studies/step_control.py [options of `ngtmc run`], e.g. --resolution medium
+    import sys
+
+    from ngtmc.cli import run_script
+    sys.exit(run_script(NAME))

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from ngtmc import sensitivities as S
-from studies import design_for_contact as D
+from ngtmc.studies import design_for_contact as D
 
 # coarse mesh and steps (the tests of ngtmc.sensitivities use the same scene)
 OVERRIDES = {"h_band": 0.2, "h_pad": 0.1, "h": 0.5, "du": 0.025, "l0": 0.3, "Gc": 0.1}

@@ -1,5 +1,8 @@
 """The library finds named studies through its registry (ngtmc.study.STUDIES and the entry points
-of the group "ngtmc.studies"), never by scanning or importing the top-level studies package."""
+of the group "ngtmc.studies"), never by scanning or importing a package of studies. The studies of
+ngtmc live in the folder studies/ at the top of the repository and import as ngtmc.studies
+(pyproject package-dir; from a source tree, the finder of ngtmc/__init__.py): there is no top-level
+package "studies"."""
 import importlib.metadata
 from pathlib import Path
 import subprocess
@@ -15,16 +18,46 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_registry_names_every_study_file_of_ngtmc():
     files = sorted(f.stem for f in (ROOT / "studies").glob("*.py") if not f.stem.startswith("_"))
     assert sorted(STUDIES) == files
-    assert all(STUDIES[n] == f"studies.{n}" for n in files)
+    assert all(STUDIES[n] == f"ngtmc.studies.{n}" for n in files)
     assert set(files) <= set(list_studies())
 
 
 def test_listing_studies_imports_no_study():
     code = ("import sys, ngtmc; names = ngtmc.list_studies(); "
             "assert 'three_point_bending' in names, names; "
-            "assert not [m for m in sys.modules if m == 'studies' or m.startswith('studies.')], "
-            "[m for m in sys.modules if m.startswith('studies')]")
+            "assert not [m for m in sys.modules if 'studies' in m.split('.')], "
+            "[m for m in sys.modules if 'studies' in m.split('.')]")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT / "tests")
+
+
+def _python(code_or_args, cwd, **kw):
+    """Run Python in a fresh process from ``cwd`` with this source tree first on the path."""
+    import os
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    args = ["-c", code_or_args] if isinstance(code_or_args, str) else list(code_or_args)
+    return subprocess.run([sys.executable, *args], cwd=cwd, env=env, capture_output=True, text=True, **kw)
+
+
+def test_studies_import_as_ngtmc_studies_from_this_tree(tmp_path):
+    code = ("import ngtmc, ngtmc.studies.three_point_bending as t, ngtmc.studies.step_control as s; "
+            "print(ngtmc.__file__); print(ngtmc.studies.__file__); print(t.__file__); "
+            "assert s.tpb is t")
+    r = _python(code, tmp_path)
+    assert r.returncode == 0, r.stderr
+    pkg, init, tpb = (Path(line) for line in r.stdout.split())
+    assert pkg == ROOT / "ngtmc" / "__init__.py"  # the ngtmc of this tree, and its studies/
+    assert init == ROOT / "studies" / "__init__.py" and tpb == ROOT / "studies" / "three_point_bending.py"
+
+
+@pytest.mark.parametrize("name", sorted(STUDIES))
+def test_study_file_runs_as_a_script_and_loads_from_its_path(name, tmp_path):
+    """`python studies/NAME.py --help` from another folder (its imports of ngtmc.studies resolve),
+    and `ngtmc run studies/NAME.py` imports the file by path (ngtmc.study.load_study_file)."""
+    r = _python([str(ROOT / "studies" / f"{name}.py"), "--help"], tmp_path, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "usage:" in r.stdout and "--resolution" in r.stdout, r.stdout
+    mod = load_study(str(ROOT / "studies" / f"{name}.py"))
+    assert mod.NAME == name
 
 
 _STUDY = '''"""A study registered by another package."""
@@ -53,7 +86,7 @@ def test_entry_points_register_other_packages_studies(tmp_path, monkeypatch):
     monkeypatch.setattr(importlib.metadata, "entry_points", fake)
     reg = registered_studies()
     assert reg["plugged_study"] == "ngtmc_plugged_study_mod"
-    assert reg["three_point_bending"] == "studies.three_point_bending"  # ngtmc's own name is not taken over
+    assert reg["three_point_bending"] == "ngtmc.studies.three_point_bending"  # ngtmc's own name is not taken over
     assert "plugged_study" in list_studies()
     assert load_study("plugged-study").NAME == "plugged_study"
     with pytest.raises(StudyError, match="'broken' is registered as module 'ngtmc_no_such_module_xyz'"):

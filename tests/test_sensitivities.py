@@ -20,7 +20,7 @@ import pytest
 
 import ngtmc
 from ngtmc import sensitivities as S
-from studies import design_for_contact as D
+from ngtmc.studies import design_for_contact as D
 
 OVERRIDES = {"h_band": 0.2, "h_pad": 0.1, "h": 0.5, "du": 0.025, "l0": 0.3, "Gc": 0.1}
 TOL = 1e-4

@@ -10,8 +10,8 @@ import pytest
 
 import ngtmc
 from ngtmc.study import load_study, study_parameters
-from studies import step_control as sc
-from studies import three_point_bending as tpb
+from ngtmc.studies import step_control as sc
+from ngtmc.studies import three_point_bending as tpb
 
 
 def test_cases_and_physics_shared_with_three_point_bending():

@@ -191,3 +191,49 @@ def test_no_time_left_while_the_steps_are_tiny():
     line = p.line(sim, {"step": 9, "load": sim.t, "step_size": 1e-6, "force": 30.0, "newton_iterations": 3,
                         "cutbacks": 0, "wall_time": 90.0})
     assert "no estimate of the time left while the steps are this short" in line and "s left" not in line
+
+
+# ---------------------------------------------------------------------------------- steps, plugins
+def test_steps_yields_each_accepted_row_and_run_is_built_on_it():
+    sim = ngtmc.Simulation(_bar(), 0.001, _control())
+    it = sim.steps()
+    first = next(it)                      # lazy: one step solved, the state is that of the step
+    assert sim.step == 1 and first is sim.rows[-1] and first["step"] == 1 and not sim.finished
+    rows = [first, *it]
+    assert sim.finished and rows == sim.rows[1:] and [r["step"] for r in rows] == list(range(1, len(rows) + 1))
+    seen = []
+    res = ngtmc.Simulation(_bar(), 0.001, _control()).run(callbacks=[lambda s, row: seen.append(row["load"])])
+    assert seen == [r["load"] for r in rows] == list(res.history["load"].iloc[1:])
+
+
+def test_max_steps_ends_the_steps_with_a_step_failure():
+    sim = ngtmc.Simulation(_bar(), 0.001, _control(), max_steps=2)
+    got = []
+    with pytest.raises(ngtmc.StepFailure, match="max_steps = 2") as e:
+        for row in sim.steps():
+            got.append(row["step"])
+    assert got == [1, 2] and len(e.value.history) == 3
+
+
+def test_report_output_plugin(tmp_path, capsys, monkeypatch):
+    """The report is a plugin: rendered once, from the run folder, when the run ends; strict only
+    for a completed run."""
+    from ngtmc.plugins import ReportOutput
+    import ngtmc.report
+    calls = []
+    monkeypatch.setattr(ngtmc.report, "render_report", lambda out: calls.append(out) or Path(out) / "report.html")
+    plugin = ReportOutput(tmp_path, strict=True)
+    plugin(None, {})                      # nothing per step
+    assert calls == []
+    assert plugin.finish("completed") == tmp_path / "report.html" and calls == [tmp_path]
+
+    def broken(out):
+        raise ValueError("no history")
+
+    monkeypatch.setattr(ngtmc.report, "render_report", broken)
+    ReportOutput(tmp_path, strict=True).finish("failed")          # a failed run: warn only
+    assert "report not rendered: ValueError: no history" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="no history"):
+        ReportOutput(tmp_path, strict=True).finish("completed")
+    ReportOutput(tmp_path, strict=False).finish("completed")
+    assert "report not rendered" in capsys.readouterr().err

@@ -1,0 +1,213 @@
+"""Run a named study into a run folder (the format of ``docs/run-directory.md``).
+
+    >>> import ngtmc
+    >>> run_dir = ngtmc.run_study("three_point_bending", resolution="quick")   # doctest: +SKIP
+
+One folder per run holds ``metadata.json``, ``history.csv`` (one row per accepted step, per case),
+``snapshots.npz`` (u, alpha at the vertices and rho per triangle at chosen loads), ``vtk/``
+(ParaView series), ``checkpoint/`` (to resume) and, if the report module is available,
+``report.html``.
+
+Every file is written to a temporary file and moved into place with ``os.replace``, so a crash never
+leaves a truncated history or metadata behind. Checkpoints (``checkpoint/<case>.npz``: the
+Simulation state, the history rows and the snapshots of that case) are written every
+``checkpoint_every`` accepted steps or ``checkpoint_seconds`` seconds, whichever comes first, and
+when a run is interrupted or fails; each case keeps two generations. ``run_study(...,
+resume=True)`` continues from them and gives the same history as an uninterrupted run (wall and
+solve times aside). A resume takes the recorded overrides and refuses other ones, skips an
+unreadable checkpoint (named in a warning) for the older generation, and never rewrites the rows
+of a completed case (see :mod:`ngtmc.runfiles`).
+
+The outputs (snapshots and VTK, checkpoints, progress, user callbacks, the report) are the plugins
+of :mod:`ngtmc.plugins`, on the accepted steps that ``Simulation.steps()`` yields. A user's own
+scene goes through the same run: :func:`run_scene` (``ngtmc.simulate(..., out_dir=...)``) wraps it in a
+one-case study (:func:`scene_study`).
+
+A failed run (:class:`ngtmc.StepFailure`) still writes its history and metadata, with status
+``"failed"`` and the error message, and then re-raises. An interrupted run (KeyboardInterrupt)
+gets status ``"interrupted"``.
+
+This package: :func:`run_study` and the checks before a run (here); the folder of a run, its
+files, metadata and checkpoints (:mod:`ngtmc.runner.folder`); the case loop and resume
+(:mod:`ngtmc.runner.cases`); a user's own scene (:mod:`ngtmc.runner.user_scene`).
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from pathlib import Path
+from types import ModuleType
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..plugins import ReportOutput
+from ..runfiles import (UNITS, effective_status, git_revision, jsonable, parameter_table, read_metadata,
+                        resume_parameters, typed_overrides, versions, write_atomic, write_json, write_npz)
+from ..study import StudyError, load_study, study_parameters
+from .cases import _Run
+from .folder import HISTORY_COLUMNS, case_results
+from .user_scene import run_scene, scene_study
+
+__all__ = ["run_study", "run_scene", "scene_study", "default_output", "HISTORY_COLUMNS", "case_results",
+           "write_atomic"]
+
+# the metadata pieces live in ngtmc.runfiles (the run-folder schema); kept here for their callers
+_UNITS = UNITS
+_versions, _git_revision, _parameter_table = versions, git_revision, parameter_table
+_jsonable = jsonable            # kept for the callers of the former private names
+_write_json = write_json
+_write_npz = write_npz
+
+
+def default_output(study: str, resolution: str, base: str | Path = "reports") -> Path:
+    """``reports/<study>-<resolution>``; if that folder holds a run already, a time-stamped sibling."""
+    d = Path(base) / f"{study}-{resolution}"
+    if d.exists() and any(d.iterdir()):
+        stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+        d = Path(base) / f"{study}-{resolution}-{stamp}"
+        k = 1
+        while d.exists():
+            k += 1
+            d = Path(base) / f"{study}-{resolution}-{stamp}-{k}"
+    return d
+
+
+def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Path | None:
+    base = Path(base)
+    if not base.is_dir():
+        return None
+    cands = [d for d in base.glob(f"{study}-{resolution}*") if (d / "checkpoint").is_dir()]
+    return max(cands, key=lambda d: d.stat().st_mtime) if cands else None
+
+
+def run_study(name: str | ModuleType, resolution: str | None = None, output: str | Path | None = None,
+              overrides: dict | None = None, report: bool | None = None, resume: bool = False,
+              progress: bool | Callable = True, *, threads: int | None = 2, checkpoint_every: int = 25,
+              checkpoint_seconds: float = 30.0, vtk: bool = True,
+              callbacks: Sequence[Callable] = ()) -> Path:
+    """Run a named study and return the path of its run folder.
+
+    Parameters
+    ----------
+    name : str or module
+        Study name (dashes or underscores, see :func:`ngtmc.list_studies`), or a study module.
+    resolution : str, optional
+        One of the study's RESOLUTIONS (default: its DEFAULT_RESOLUTION, normally ``"quick"``).
+    output : path, optional
+        Run folder. Default ``reports/<study>-<resolution>`` (time-stamped if it exists already); with
+        ``resume=True`` and no output, the latest ``reports/<study>-<resolution>*`` with a checkpoint.
+    overrides : dict, optional
+        Any parameter of the study (PARAMETERS or resolution keys, e.g. ``{"k_u": 50, "du_max": 1e-3}``);
+        strings are converted to the type of the default. Unknown keys and values of the wrong type
+        raise StudyError. With ``resume=True``: None takes the recorded overrides, and overrides
+        that differ from them raise StudyError listing the differences (``key: recorded -> given``).
+    report : bool, optional
+        Render ``report.html`` with :func:`ngtmc.report.render_report` at the end. None: try and only
+        warn if it fails; True: fail if it fails; False: do not.
+    resume : bool
+        Continue from the checkpoints in ``output``.
+    progress : bool or callable
+        True prints a progress line about every 5 s on stderr; a callable receives each history row
+        (with its ``case``).
+    threads : int or None
+        ``ngsolve.SetNumThreads`` (an integer >= 1); the run is inside ``ngsolve.TaskManager()``.
+        None: leave as is.
+    checkpoint_every, checkpoint_seconds : checkpoint period in accepted steps and seconds.
+    vtk : bool
+        Write the ParaView series into ``vtk/``.
+    callbacks : functions f(simulation, row) called after every accepted step (row includes ``case``).
+
+    Raises StepFailure (after writing the history and metadata with status "failed") when a step
+    fails at the minimum increment, and StudyError, before any folder is created or anything
+    solved, for bad input (unknown study, resolution or override, ill-typed or out-of-range
+    values, a bad scene, threads < 1) or a resume that would mix parameters.
+    """
+    return _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
+                    checkpoint_seconds, vtk, callbacks).out
+
+
+def _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
+             checkpoint_seconds, vtk, callbacks) -> "_Run":
+    """The work of :func:`run_study`; returns the finished run (its folder ``out``, and the
+    Simulation of each case computed in this process in ``simulations``)."""
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
+                                or threads < 1):
+        raise StudyError(f"threads = {threads!r} is not allowed: give an integer >= 1 (NGSolve threads), "
+                         "or None to leave the thread count as it is")
+    mod = name if isinstance(name, ModuleType) else load_study(name)
+    meta = None
+    if resume:
+        if output is None:
+            output = _latest_run(mod.NAME, resolution or getattr(mod, "DEFAULT_RESOLUTION", "quick"))
+            if output is None:
+                raise StudyError(f"resume=True but no run folder reports/{mod.NAME}-"
+                                 f"{resolution or getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}* with a checkpoint "
+                                 "exists; give output=")
+        out = Path(output)
+        if not (out / "checkpoint").is_dir():
+            raise StudyError(f"resume=True but {out} has no checkpoint/ folder")
+        meta = read_metadata(out)
+        if meta is not None:
+            status, note = effective_status(meta)
+            proc = meta.get("process") or {}
+            if status == "running" and note and "alive" in note and proc.get("pid") != os.getpid():
+                raise StudyError(f"cannot resume {out}: it is still running ({note})")
+        res, typed, p = resume_parameters(meta, mod, resolution, overrides, out)
+    else:
+        res, p = study_parameters(mod, resolution, overrides)
+        typed = typed_overrides(p, overrides)
+        out = Path(output) if output is not None else default_output(mod.NAME, res)
+        if out.exists() and (out / "history.csv").exists():
+            old = read_metadata(out) or {}
+            status, note = effective_status(old) if old else ("unknown", None)
+            raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
+                             "another output, or resume=True / --resume to continue it")
+    run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+    if resume:
+        if meta is not None and meta.get("status") == "running":
+            run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")
+        run.prepare_resume(meta)
+    run.validate()     # bad input is refused here, before any folder is created or any step solved
+    import ngsolve as ngs
+    if threads:
+        ngs.SetNumThreads(int(threads))
+    run.progress.say(f"resolution {res!r}, output {out}")
+    # outputs of the whole run (those of each case: _Run.run_case)
+    outputs = [ReportOutput(out, strict=bool(report))] if (report or report is None) else []
+    try:
+        with _terminate_as_interrupt(), ngs.TaskManager():
+            run.run(resume, meta)
+    except BaseException:
+        # a failed or interrupted run still gets its report (with a status banner): nothing is lost
+        for plugin in outputs:
+            plugin.finish("interrupted" if run.status == "interrupted" else "failed")
+        raise
+    run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
+    for plugin in outputs:
+        plugin.finish(run.status)
+    return run
+
+
+class _terminate_as_interrupt:
+    """Within the block, SIGTERM raises KeyboardInterrupt (so a killed run is recorded as
+    "interrupted" with a checkpoint at its last accepted step). Main thread only."""
+
+    def __enter__(self):
+        import signal
+        import threading
+        self.old = None
+        if threading.current_thread() is threading.main_thread():
+            def handler(signum, frame):
+                raise KeyboardInterrupt(f"signal {signum}")
+            try:
+                self.old = signal.signal(signal.SIGTERM, handler)
+            except (ValueError, OSError):  # pragma: no cover
+                self.old = None
+        return self
+
+    def __exit__(self, *exc):
+        if self.old is not None:
+            import signal
+            signal.signal(signal.SIGTERM, self.old)
+        return False

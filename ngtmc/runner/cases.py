@@ -1,0 +1,264 @@
+"""The case loop of a run: resume (what the checkpoints and the recorded files of a run folder
+allow to take over), validation of every case before anything is solved, and each case through
+:meth:`ngtmc.Simulation.steps` and the plugins of :mod:`ngtmc.plugins`, into its
+:class:`ngtmc.runner.folder.RunFolder`.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+
+from ..plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput
+from ..snapshots import Snapshots
+from ..study import Case, StudyError
+from .folder import _CONTROL_SETTINGS, RunFolder, _mesh_info, case_results
+
+__all__ = ["_Run"]
+
+
+class _Run(RunFolder):
+    """One run: its folder (:class:`RunFolder`), its progress and per-step outputs, and the loop
+    over its cases (:meth:`run`)."""
+
+    def __init__(self, mod, resolution, p, out, overrides, progress, checkpoint_every, checkpoint_seconds,
+                 callbacks, vtk):
+        super().__init__(mod, resolution, p, out, overrides)
+        self.checkpoint_every = int(checkpoint_every)
+        self.checkpoint_seconds = float(checkpoint_seconds)
+        self.callbacks = list(callbacks or [])
+        self.vtk = vtk
+        self.progress_setting = progress
+        self.progress = Progress(progress, f"[ngtmc {mod.NAME}]")
+        self.simulations: dict = {}             # case -> the Simulation that computed it in this process
+        self.resume_from: dict[str, dict] = {}   # case -> checkpoint to continue from (see prepare_resume)
+
+    # ------------------------------------------------------------ resume
+    def _adopt_completed(self, case: Case, ck: dict):
+        self.rows[case.name] = ck["rows"]
+        self.results[case.name] = ck["results"]
+        self.case_meta[case.name] = ck["case_meta"]
+        if ck["snaparr"]:
+            self.snaps[case.name] = ck["snaparr"]
+        if self.mesh is None and ck["case_meta"].get("mesh"):
+            self.mesh = dict(ck["case_meta"]["mesh"])
+
+    def prepare_resume(self, meta: dict | None):
+        """Read every case's checkpoint before anything is solved or written: completed cases are
+        taken over, interrupted ones continue from their state. A case without a readable
+        checkpoint that the recorded metadata calls completed is taken from history.csv (and
+        snapshots.npz); any other case without one is re-run from the start."""
+        recorded = (meta or {}).get("results") or {}
+        old_hist = old_snaps = None
+        for case in self.cases:
+            ck = self.load_checkpoint(case)
+            if ck is not None and ck["done"]:
+                self._adopt_completed(case, ck)
+            elif ck is not None:
+                self.resume_from[case.name] = ck
+                # kept in the files until the case goes on, so that no failure before then loses them
+                self.rows[case.name] = ck["rows"]
+                self.results[case.name] = ck["results"]
+                self.case_meta[case.name] = ck["case_meta"]
+                if ck["snaparr"]:
+                    self.snaps[case.name] = ck["snaparr"]
+            elif (recorded.get(case.name) or {}).get("status") == "completed":
+                if old_hist is None:
+                    old_hist, old_snaps = self._recorded_files()
+                rows = old_hist[old_hist["case"].astype(str) == case.name] if len(old_hist) else old_hist
+                if len(rows):
+                    cm = next((dict(c) for c in meta.get("cases", []) if c.get("name") == case.name), {})
+                    for k in ("name", "label", "parameters"):
+                        cm.pop(k, None)
+                    ck = {"rows": [{k: v for k, v in r.items() if not (isinstance(v, float) and np.isnan(v))}
+                                   for r in rows.drop(columns="case").to_dict("records")],
+                          "results": recorded[case.name], "case_meta": cm,
+                          "snaparr": {k: v for k, v in old_snaps.items() if k.startswith(case.name + "__")}}
+                    self._adopt_completed(case, ck)
+                    self.save_checkpoint(case, {"rows": ck["rows"]}, None, done=True)
+                    self.progress.say(f"case {case.name}: no readable checkpoint; its completed results are "
+                                      "taken from history.csv and metadata.json")
+
+    def _recorded_files(self):
+        try:
+            hist = pd.read_csv(self.out / "history.csv")
+        except Exception:
+            hist = pd.DataFrame()
+        snaps = {}
+        try:
+            with np.load(self.out / "snapshots.npz", allow_pickle=False) as z:
+                snaps = {k: z[k] for k in z.files}
+        except Exception:
+            pass
+        return hist, snaps
+
+    def validate(self):
+        """Check every case still to be computed (scene, schedule, control, options) before any folder
+        is created or any step solved; raise StudyError naming the case and the parameter."""
+        import inspect
+        from ..simulation import Simulation
+        from ..stepping import AdaptiveStepControl, Schedule
+        allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
+        for case in self.cases:
+            if case.name in self.results or case.run is not None:
+                continue
+            try:
+                if case.control is not None and not isinstance(case.control, AdaptiveStepControl):
+                    raise TypeError(f"control must be an ngtmc.AdaptiveStepControl or None, got "
+                                    f"{type(case.control).__name__} {case.control!r}")
+                if not isinstance(case.schedule, Schedule):
+                    case.schedule = Schedule.monotonic(float(case.schedule))
+                bad = sorted(set(case.options or {}) - allowed)
+                if bad:
+                    raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
+                case.build_scene().check()
+            except (ValueError, TypeError) as e:
+                raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
+
+    # ------------------------------------------------------------ one case
+    def run_case(self, k: int, case: Case, resume: bool):
+        from ..simulation import Simulation, StepFailure
+
+        ck = self.resume_from.pop(case.name, None)
+        if case.name in self.results and self.results[case.name].get("status") == "completed":
+            self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: already complete (checkpoint)")
+            return
+
+        if case.run is not None:
+            self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: {case.label}")
+            t0 = time.perf_counter()
+            df = case.run(case, self.out)
+            df = pd.DataFrame(df).copy()
+            if "step" not in df:
+                df["step"] = np.arange(len(df))
+            if "wall_time" not in df:
+                df["wall_time"] = np.nan
+                df.loc[df.index[-1], "wall_time"] = time.perf_counter() - t0
+            self.rows[case.name] = df.to_dict("records")
+            res = case_results(df)
+            res.setdefault("wall_time_s", time.perf_counter() - t0)
+            res["status"] = "completed"
+            self.results[case.name] = res
+            self.save_checkpoint(case, {"rows": self.rows[case.name]}, None, done=True)
+            self.write_all()
+            return
+
+        self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: building the scene ({case.label})")
+        cpu0 = time.process_time() - float((ck or {}).get("case_meta", {}).get("cpu_time_s", 0.0))
+        t_build = time.perf_counter()
+        scene = case.build_scene()
+        sim = Simulation(scene, case.schedule, case.control, progress=False, **(case.options or {}))
+        build_time = time.perf_counter() - t_build
+        mesh_info = _mesh_info(sim.solver)
+        mesh_info["dim"] = scene.dim
+        if self.mesh is None:
+            self.mesh = dict(mesh_info)
+        cm = {"mesh": {k_: v for k_, v in mesh_info.items() if k_ != "dim"}, "setup_time_s": build_time}
+        if self.force_unit is None:
+            self.force_unit = sim.force_unit
+            self.thickness = scene.thickness
+        for key, has in (("fracture", scene.has_fracture), ("void", scene.has_void),
+                         ("regulariser", scene.regulariser is not None)):
+            self.features[key] = bool(self.features.get(key, False) or has)
+        if case.control is not None:
+            cm["control"] = {a: getattr(case.control, a) for a in _CONTROL_SETTINGS if hasattr(case.control, a)}
+        cm["schedule"] = [float(x) for x in sim.schedule.points]
+        cm["options"] = {k_: v for k_, v in (case.options or {}).items() if isinstance(v, (int, float, str, bool))}
+        self.case_meta[case.name] = cm
+        self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: {mesh_info['n_elements']} elements, "
+                          f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
+                          f"(set-up {build_time:.1f} s)")
+        vtk_dir = self.out / "vtk" if self.vtk else None
+        snaps = Snapshots(case, sim.solver, vtk_dir)
+        if ck is not None:
+            sim.set_state(ck["state"])
+            if ck["snap"]:
+                snaps.restore(ck["snap"])
+                snaps.write_pvd()
+            self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: resuming from step {sim.step} "
+                              f"(load {sim.solver.load:.6g} mm)")
+        self.rows[case.name] = sim.rows
+        self.simulations[case.name] = sim
+
+        def save(state):
+            self.snaps[case.name] = snaps.arrays(case.name)
+            cm["cpu_time_s"] = time.process_time() - cpu0
+            self.save_checkpoint(case, state, snaps, done=False)
+            self.write_all()
+
+        checkpoints = CheckpointOutput(sim, save, self.checkpoint_every, self.checkpoint_seconds)
+        plugins = [SnapshotOutput(snaps, float(sim.rows[-1]["load"])),
+                   Progress(self.progress_setting, f"[ngtmc {self.mod.NAME}] case {k + 1}/{len(self.cases)} "
+                            f"{case.name}:", sim.force_unit, case=case.name),
+                   checkpoints, RowCallbacks(self.callbacks, case.name)]
+        last = checkpoints     # .state: the state of the last accepted step
+
+        def finish(status, error=None):
+            for plugin in plugins:
+                plugin.finish(status)
+            state = last.state
+            self.rows[case.name] = [dict(r) for r in state["rows"]]
+            res = case_results(pd.DataFrame(self.rows[case.name]))
+            res["status"] = status
+            # CPU time of all threads of this process (wall time inflates when the machine is shared)
+            res["cpu_time_s"] = cm["cpu_time_s"] = time.process_time() - cpu0
+            # where the time went (s) since this process started the case (see ngtmc.solver.TIMING_KEYS)
+            res["time_split_s"] = {k: float(v) for k, v in sim.solver.timings.items()}
+            if error:
+                res["error"] = error
+            self.results[case.name] = res
+            self.snaps[case.name] = snaps.arrays(case.name)
+            self.save_checkpoint(case, state, snaps, done=(status == "completed"))
+
+        try:
+            for row in sim.steps():       # the accepted steps, each through the case's plugins
+                for plugin in plugins:
+                    plugin(sim, row)
+        except StepFailure as e:
+            finish("failed", str(e))
+            raise
+        except KeyboardInterrupt:
+            finish("interrupted", "interrupted")
+            raise
+        except Exception as e:
+            finish("failed", f"{type(e).__name__}: {e}")
+            raise
+        if not snaps.steps or snaps.steps[-1] != sim.step:
+            snaps.take(sim.rows[-1])
+        last.state = sim.get_state()
+        finish("completed")
+        r = self.results[case.name]
+        self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: done, {r['steps']} steps, "
+                          f"peak force {r['peak_force']:.5g} {sim.force_unit} at {r['peak_load']:.5g} mm, {r.get('wall_time_s', 0):.0f} s")
+        self.write_all()
+
+    # ------------------------------------------------------------ whole run
+    def run(self, resume: bool, meta: dict | None = None):
+        """Compute every case not taken over by :meth:`prepare_resume`; ``meta``: the recorded
+        metadata of the run to resume (its creation date and wall time carry over)."""
+        if resume and meta:
+            if isinstance(meta.get("features"), dict):
+                self.features.update({k: bool(v) for k, v in meta["features"].items()})
+            try:
+                self.wall_before = float(meta.get("wall_time_s") or 0.0)
+                self.created = meta.get("created", self.created)
+            except (TypeError, ValueError):
+                pass
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.write_metadata()
+        try:
+            for k, case in enumerate(self.cases):
+                self.run_case(k, case, resume)
+        except KeyboardInterrupt:
+            self.status = "interrupted"
+            self.error = "interrupted by the user (resume with resume=True / --resume)"
+            self.write_all()
+            raise
+        except BaseException as e:
+            self.status = "failed"
+            self.error = f"{type(e).__name__}: {e}"
+            self.write_all()
+            raise
+        self.status = "completed"
+        self.write_all()
