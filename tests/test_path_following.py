@@ -1,0 +1,95 @@
+"""Path following of the monolithic scheme (ngtmc.path, CoupledNewton.solve with ``dissipation``):
+the dissipation it controls is that of the recorded history, a dissipation step ends in an
+equilibrium of the fixed-load problem at the load it found, and a crack that snaps back is
+followed through the snap-back in a few steps."""
+import numpy as np
+import pytest
+
+import ngtmc
+from ngtmc.coupled import CoupledNewton
+from scenes import notched_plate
+
+
+def _plate():
+    return notched_plate(maxh=0.2, h_band=0.05, l0=0.1)
+
+
+def _loaded(load=0.005):
+    """Notched plate loaded by the monolithic scheme to ``load`` mm (before the crack runs)."""
+    sim = ngtmc.Simulation(_plate(), load, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7), scheme="monolithic")
+    sim.run()
+    return sim
+
+
+def test_dissipation_is_the_recorded_dissipated_energy():
+    """D = 1/2 alpha^T M alpha of the path equals W_f / c_w of the history (per mm of thickness),
+    and the reference toughness is the plate's Gc (2.7 N/mm)."""
+    sim = _loaded(0.004)
+    c = sim.coupled
+    en = sim.solver.energies()
+    assert en["dissipated_energy"] > 0
+    assert c.dissipation() == pytest.approx(en["dissipated_energy"] / sim.solver.thickness, rel=1e-10)
+    assert c.reference_toughness() == pytest.approx(2.7, rel=1e-12)
+
+
+def test_dissipation_step_ends_in_the_equilibrium_of_its_load():
+    """A dissipation step from an accepted state dissipates the prescribed energy (to 1e-6 of
+    it), keeps alpha >= alpha_{n-1}, and its state is an equilibrium of the fixed-load coupled
+    problem at the load it found: the load-controlled Newton started there takes no iteration."""
+    sim = _loaded(0.005)
+    s, c = sim.solver, sim.coupled
+    d0 = c.dissipation()
+    a0 = s.alpha_committed.copy()
+    dD = 0.05  # N mm per mm, about 0.02 mm of crack at Gc = 2.7 N/mm
+    res = s.solve_displacement(0.0051)
+    assert res.converged
+    res = c.solve(0.0051, dissipation=dD, load_bounds=(0.0, 0.012))
+    assert res.converged, res.message
+    lam = c.load_solved
+    print(f"\ndissipation step: load {lam:.6g} mm after {res.iterations} iterations")
+    assert c.dissipation() - d0 == pytest.approx(dD, rel=1e-6)
+    assert np.all(s.alpha.vec.FV().NumPy() >= a0)
+    again = c.solve(lam)
+    assert again.converged and again.iterations == 0
+
+
+def test_path_following_passes_the_snap_back_in_few_steps():
+    """The crack of the notched plate runs unstably: under dissipation control the load falls
+    back along the snap-back (the load decreases over accepted steps while the force drops) and
+    the whole curve to 0.012 mm takes a few tens of steps. alpha and the history never decrease,
+    and the final state (a broken plate) carries the force of the load-controlled monolithic run
+    (both converged at 0.012 mm)."""
+    states = []
+
+    def run(coupled):
+        sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7),
+                               scheme="monolithic", coupled=coupled)
+        cb = [lambda s, row: states.append((s.solver.H_committed.copy(), s.solver.alpha.vec.FV().NumPy().copy()))]
+        return sim, sim.run(callbacks=cb if coupled else ()).history
+
+    sim, h = run({"path": "dissipation"})
+    _, ref = run(None)
+    load, force = h["load"].to_numpy(), h["force"].to_numpy()
+    back = np.diff(load) < 0
+    print(f"\npath following: {len(h) - 1} steps ({sim._path.dissipation_steps} under dissipation control), "
+          f"{int(h.newton_iterations.sum())} iterations, peak {force.max():.5g} N; load control: {len(ref) - 1} steps, "
+          f"{int(ref.newton_iterations.sum())} iterations, peak {ref.force.max():.5g} N; final force {force[-1]:.5g} "
+          f"against {ref.force.iloc[-1]:.5g} N")
+    assert back.sum() >= 2 and np.all(np.diff(force)[back] < 0)
+    assert load[-1] == pytest.approx(0.012)
+    assert len(h) - 1 < 40
+    assert sim._path.dissipation_steps >= 5
+    assert force[-1] < 0.01 * force.max() and ref.force.iloc[-1] < 0.01 * ref.force.max()
+    assert force.max() == pytest.approx(ref.force.max(), rel=0.01)  # both peaks sampled at du_max steps
+    assert h["max_alpha"].iloc[-1] > 0.99
+    for (H0, a0), (H1, a1) in zip(states, states[1:]):
+        assert np.all(H1 >= H0) and np.all(a1 >= a0)
+
+
+def test_path_options_are_checked():
+    with pytest.raises(ValueError, match="path"):
+        ngtmc.Simulation(_plate(), 0.01, scheme="monolithic", coupled={"path": "arc-length"})
+    with pytest.raises(ValueError, match="crack_advance"):
+        ngtmc.Simulation(_plate(), 0.01, scheme="monolithic", coupled={"path": "dissipation", "crack_advance": -1})
+    with pytest.raises(ValueError, match="dissipation"):
+        CoupledNewton(ngtmc.Solver(_plate())).solve(0.001, dissipation=0.0)
