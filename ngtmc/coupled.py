@@ -49,6 +49,13 @@ _DEBUG = bool(_os.environ.get("NGTMC_DEBUG_COUPLED"))
 LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
 
 
+#: A solve stops as stalled when its merit function fell less than STALL_FACTOR over the last
+#: STALL_WINDOW iterations (checked from iteration STALL_WINDOW + 3 on): a Newton iteration that
+#: converges falls far faster, one that creeps along the line search does not reach the tolerance.
+STALL_WINDOW = 3
+STALL_FACTOR = 0.25
+
+
 class CoupledNewton:
     """Newton on (u, alpha) for a :class:`~ngtmc.solver.Solver` with a phase field.
 
@@ -240,9 +247,14 @@ class CoupledNewton:
             self._scatter()
             return NewtonResult(False, it, res_u, solve_time, assembly_time, 0, message)
 
+        merits = []
+        have_r = False  # True when the line search left the residual of the accepted iterate in tmp
         for it in range(1, self.max_iterations + 1):
             t0 = time.perf_counter()
-            self.form.Apply(x, r)
+            if have_r:
+                r.data = tmp
+            else:
+                self.form.Apply(x, r)
             tm["residual"] += time.perf_counter() - t0
             if not np.all(np.isfinite(rN)):
                 return failed(it, "residual is not finite")
@@ -270,6 +282,12 @@ class CoupledNewton:
             scale_u = max(reac, r_ref, s.newton.atol)
             scale_a = self.alpha_residual_scale
             merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2 + ((g / scale_g) ** 2 if path else 0.0)
+            merits.append(merit0)
+            if not lifted and len(merits) > STALL_WINDOW + 2 and merit0 > STALL_FACTOR * merits[-1 - STALL_WINDOW]:
+                # no nearby solution (a crack that wants to run at this load): stop early, the
+                # caller cuts back or changes the control
+                return failed(it, f"coupled Newton stalled (merit {merit0:.3g}, {merits[-1 - STALL_WINDOW]:.3g} "
+                                  f"{STALL_WINDOW} iterations before)")
             # semi-smooth Newton step: held alpha dofs move onto their bound, the others and the
             # free u dofs solve the linearised equations; the Dirichlet remainder is carried
             t0 = time.perf_counter()
@@ -345,6 +363,7 @@ class CoupledNewton:
                             break
                 step *= 0.5
             tm["line_search"] += time.perf_counter() - t0
+            have_r = accepted
             if not accepted:
                 xN[:] = x0.FV().NumPy()
                 return failed(it, "coupled line search failed" if not lifted else "no admissible step towards the boundary values")

@@ -16,13 +16,18 @@ The rule of a step, for the step size du (mm) that the step control proposes (Eq
 applied: it bounds the dissipation per step, which the path now does itself):
 
 1. Predict the dissipation of a displacement step from the rate dD / d(load) of the last step.
-   If it stays below dD, take a displacement step (the coupled Newton at fixed load); accept it if
+   If it stays below dD / 2, take a displacement step (the coupled Newton at fixed load); accept it if
    it dissipated at most 2 dD.
 2. Otherwise, or if that step failed or dissipated more, take a dissipation step: a predictor at
    the load where the rate says dD is reached, then the coupled Newton with the load as unknown
    (:meth:`ngtmc.coupled.CoupledNewton.solve` with ``dissipation``). Its load must stay on the
    current segment of the schedule; if it would pass the segment's end, the step is a
    displacement step to that end.
+3. After a dissipation step the next step is a dissipation step too (no displacement attempt:
+   in stable growth after a crack run, a fixed-load Newton creeps where the dissipation-controlled
+   one converges in a few iterations: the crack advances element by element, each advance a small
+   snap-back), until a dissipation step moves the load by more than du_max: the crack has
+   stopped, and that step is replaced by a displacement step of du.
 
 dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a failed step and
 doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
@@ -67,6 +72,9 @@ class DissipationPath:
         self.d_prev = c.dissipation()
         #: accepted steps taken under dissipation control
         self.dissipation_steps = 0
+        #: True after a dissipation step: the next step is one too, until the load of a
+        #: dissipation step moves more than the step control's increment
+        self.dissipating = False
 
     @property
     def target(self) -> float:
@@ -98,7 +106,7 @@ class DissipationPath:
                 "projected": 0}
         saved = s.get_state()
         du = abs(sch.load(t_new) - load_n)
-        if self.rate * du <= dD:
+        if not self.dissipating and self.rate * du <= 0.5 * dD:
             ok, info = self._fixed(sch.load(t_new), info)
             if ok and self.coupled.dissipation() - self.d_prev <= 2.0 * dD:
                 info["t_new"] = t_new
@@ -121,9 +129,19 @@ class DissipationPath:
         if r.converged:
             H_trial = s.trial_history()
             if np.all(np.isfinite(H_trial)):
+                if abs(self.coupled.load_solved - load_n) > sim.control.du_max * (1 + 1e-9):
+                    # the crack has stopped growing: the load moved more than a displacement
+                    # step may; take that step instead and leave dissipation control
+                    self.dissipating = False
+                    s.set_state(saved)
+                    ok, info = self._fixed(sch.load(t_new), info)
+                    if ok:
+                        info["t_new"] = t_new
+                    return ok, info
                 info["H_trial"] = H_trial
                 info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
                 self.dissipation_steps += 1
+                self.dissipating = True
                 return True, info
             r.message = "history not finite (J <= 0 at a history point)"
         s.set_state(keep)
@@ -160,9 +178,11 @@ class DissipationPath:
             self.rate = math.inf if delta > 0 else self.rate
 
     def get_state(self) -> dict:
-        return {"rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps}
+        return {"rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+                "dissipating": self.dissipating}
 
     def set_state(self, st: dict):
         self.rate = float(st["rate"])
         self.d_prev = float(st["d_prev"])
         self.dissipation_steps = int(st["dissipation_steps"])
+        self.dissipating = bool(st.get("dissipating", False))

@@ -13,6 +13,10 @@ Each accepted step solves the equations of the step by one of three schemes (``s
   ``staggered_tol`` (alternate minimisation; converged damage, many passes while a crack runs);
 * ``"monolithic"``: Newton on (u, alpha) together with the history of the step inside the
   iteration and alpha >= alpha_{n-1} as an active set (:mod:`ngtmc.coupled`); converged damage.
+* ``"path-following"``: the monolithic Newton with the load as an unknown where the crack grows
+  (dissipation control, :mod:`ngtmc.path`): a crack that runs unstably is followed through its
+  snap-back in steps of a prescribed crack advance; ``"monolithic"`` with
+  ``coupled={"path": "dissipation"}``.
 
 A step that fails (Newton does not converge) is retried with half the increment; a run that fails
 at the minimum increment raises :class:`StepFailure`, which carries the history recorded so far.
@@ -36,7 +40,7 @@ from .stepping import AdaptiveStepControl, ControlState, Schedule
 __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "simulate"]
 
 #: Solution schemes of a load step (see the module docstring).
-SCHEMES = ("single-pass", "staggered", "monolithic")
+SCHEMES = ("single-pass", "staggered", "monolithic", "path-following")
 
 #: Units of the history columns (force and energies are for the scene thickness in 2D); defined
 #: once, in :mod:`ngtmc.runfiles`.
@@ -90,7 +94,7 @@ class Simulation:
         Load schedule (mm); a number means monotonic loading from 0 to that value.
     control : AdaptiveStepControl, optional
         Step-size rule; default constant steps of 1/20 of the first segment.
-    scheme : "single-pass", "staggered" or "monolithic"
+    scheme : "single-pass", "staggered", "monolithic" or "path-following"
         How the equations of a step are solved (see the module docstring).
     staggered_tol : float
         Largest change of alpha between two passes for "staggered", dimensionless.
@@ -101,7 +105,10 @@ class Simulation:
         of :class:`ngtmc.coupled.CoupledNewton`; ``fallback`` ("single-pass", "capped" or
         "staggered", see ``_attempt_monolithic``); ``damage_cap`` (default 0.25) and
         ``max_substeps`` (default 200) of its capped sub-steps; ``fallback_passes`` (default 400)
-        and ``newton_every`` (default 10) of its staggered fallback (see ``_attempt_monolithic``).
+        and ``newton_every`` (default 10) of its staggered fallback (see ``_attempt_monolithic``);
+        ``path`` (None, or "dissipation" for path following, the default of
+        ``scheme="path-following"``) and ``crack_advance`` (mm per dissipation step, default the
+        mean l0 of the fracture regions; :mod:`ngtmc.path`).
     newton : NewtonOptions, optional
     progress : bool or callable
         True prints a progress line to stderr about every 5 s (:class:`ngtmc.plugins.Progress`, the
@@ -143,6 +150,8 @@ class Simulation:
         self.solver = Solver(scene, newton=newton, compile=compile)
         self.coupled = None
         copt = dict(coupled or {})
+        if scheme == "path-following":
+            copt.setdefault("path", "dissipation")
         self.fallback_passes = int(copt.pop("fallback_passes", 400))
         self.newton_every = int(copt.pop("newton_every", 10))
         self.fallback = str(copt.pop("fallback", "staggered"))
@@ -156,7 +165,7 @@ class Simulation:
         self.crack_advance = copt.pop("crack_advance", None)
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
-        if scheme == "monolithic" and self.solver.alpha is not None:
+        if scheme in ("monolithic", "path-following") and self.solver.alpha is not None:
             from .coupled import CoupledNewton
             self.coupled = CoupledNewton(self.solver, **copt)
         self._path = None

@@ -32,7 +32,8 @@ __all__ = ["Case", "StudyError", "STUDIES", "ENTRY_POINT_GROUP", "registered_stu
 #: name -> (default, unit, description). They change cost and, for ``scheme``, the time
 #: discretisation, never the model.
 SOLVER_PARAMETERS = {
-    "scheme": ("single-pass", "-", "solution scheme of a load step: 'single-pass' (paper), 'staggered' or 'monolithic'"),
+    "scheme": ("single-pass", "-", "solution scheme of a load step: 'single-pass' (paper), 'staggered', 'monolithic' or "
+                                   "'path-following' (monolithic with dissipation control where the crack grows)"),
     "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, 25 s to compile; "
                              "falls back to 'symbolic' without a C++ compiler), 'symbolic', 'none', or 'auto' "
                              "('real' on meshes of 5000 elements or more)"),
