@@ -75,6 +75,11 @@ class DissipationPath:
         #: True after a dissipation step: the next step is one too, until the load of a
         #: dissipation step moves more than the step control's increment
         self.dissipating = False
+        #: the last two accepted states (u, alpha) and loads (mm), for the secant predictor
+        self.x_n = (s.u.vec.FV().NumPy().copy(), s.alpha.vec.FV().NumPy().copy())
+        self.load_n = s.load
+        self.x_prev, self.load_prev = None, None
+        self.delta_d_prev = 0.0
 
     @property
     def target(self) -> float:
@@ -117,11 +122,16 @@ class DissipationPath:
         direction = 1.0 if l_b > l_a else -1.0
         guess = du if self.rate <= 0 else min(du, dD / self.rate)
         load_guess = load_n + direction * guess
-        res = s.solve_displacement(load_guess)
-        sim._add(info, res)
-        if not res.converged:
-            info["message"] = res.message
-            return False, info
+        if self.delta_d_prev > 0:
+            load_sec = self._secant(dD / self.delta_d_prev)
+            if load_sec is not None:
+                load_guess = load_sec
+        if load_guess != getattr(self, "_secant_load", None):
+            res = s.solve_displacement(load_guess)
+            sim._add(info, res)
+            if not res.converged:
+                info["message"] = res.message
+                return False, info
         keep = s.get_state()
         lo, hi = min(l_a, l_b), max(l_a, l_b)
         r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
@@ -158,30 +168,90 @@ class DissipationPath:
         return False, info
 
     def _fixed(self, load: float, info: dict):
-        """Displacement step: the u predictor with alpha_{n-1}, then the coupled Newton at ``load``."""
+        """Displacement step: a predictor (the secant through the last two accepted states, else
+        the u solve with alpha_{n-1}), then the coupled Newton at ``load``."""
         sim, s = self.sim, self.sim.solver
-        res = s.solve_displacement(load)
-        sim._add(info, res)
-        if not res.converged:
-            info["message"] = res.message
-            return False, info
+        dl = self.load_n - self.load_prev if self.x_prev is not None else 0.0
+        if not (dl != 0.0 and self._secant((load - self.load_n) / dl, load) is not None):
+            res = s.solve_displacement(load)
+            sim._add(info, res)
+            if not res.converged:
+                info["message"] = res.message
+                return False, info
         return sim._coupled_newton(load, info)
 
+    def _secant(self, ratio: float, load: float | None = None):
+        """Set u and alpha to the secant predictor x_n + ratio (x_n - x_{n-1}) (alpha kept in
+        [alpha_n, 1]), with the boundary values of ``load`` (default: the secant load
+        lambda_n + ratio (lambda_n - lambda_{n-1})). Returns the load, or None (state unchanged)
+        when there is no previous state, the ratio is outside (0, 2], or an element would invert."""
+        self._secant_load = None
+        if self.x_prev is None or not (0.0 < ratio <= 2.0):
+            return None
+        s = self.sim.solver
+        u_n, a_n = self.x_n
+        u_p, a_p = self.x_prev
+        if load is None:
+            load = self.load_n + ratio * (self.load_n - self.load_prev)
+        uN = s.u.vec.FV().NumPy()
+        keep_u = uN.copy()
+        uN[:] = u_n + ratio * (u_n - u_p)
+        dirm = s._dir_np
+        uN[dirm] = s.dirichlet_target(load)[dirm]
+        if not (np.all(np.isfinite(uN)) and s.min_J() > 0.0):
+            uN[:] = keep_u
+            return None
+        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + ratio * (a_n - a_p), a_n, 1.0)
+        s._r_valid = False
+        self._secant_load = load
+        return load
+
     def accepted(self, step_size: float):
-        """After an accepted step of |load change| ``step_size`` (mm): update the rate dD/d(load)."""
+        """After an accepted step of |load change| ``step_size`` (mm): update the rate dD/d(load)
+        and the last two states of the secant predictor."""
+        s = self.sim.solver
         d = self.coupled.dissipation()
         delta = d - self.d_prev
         self.d_prev = d
+        self.delta_d_prev = delta
+        self.x_prev, self.load_prev = self.x_n, self.load_n
+        self.x_n = (s.u.vec.FV().NumPy().copy(), s.alpha.vec.FV().NumPy().copy())
+        self.load_n = s.load
         if step_size > 0:
             self.rate = max(delta, 0.0) / step_size
         else:
             self.rate = math.inf if delta > 0 else self.rate
 
     def get_state(self) -> dict:
+        """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
         return {"rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
-                "dissipating": self.dissipating}
+                "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
+                "delta_d_prev": self.delta_d_prev}
 
-    def set_state(self, st: dict):
+    def get_arrays(self) -> dict:
+        """The last two accepted states of the secant predictor (numpy arrays by name)."""
+        out = {"path_u_n": self.x_n[0], "path_alpha_n": self.x_n[1]}
+        if self.x_prev is not None:
+            out.update(path_u_prev=self.x_prev[0], path_alpha_prev=self.x_prev[1])
+        return out
+
+    def set_state(self, st: dict, arrays: dict | None = None):
+        """Restore :meth:`get_state` (and :meth:`get_arrays`; without them the predictor starts
+        from the solver's current state)."""
+        arrays = arrays or {}
+        s = self.sim.solver
+        if "path_u_n" in arrays:
+            self.x_n = (np.array(arrays["path_u_n"], dtype=float), np.array(arrays["path_alpha_n"], dtype=float))
+            self.load_n = float(st["load_n"])
+        else:
+            self.x_n = (s.u.vec.FV().NumPy().copy(), s.alpha.vec.FV().NumPy().copy())
+            self.load_n = s.load
+        if "path_u_prev" in arrays:
+            self.x_prev = (np.array(arrays["path_u_prev"], dtype=float), np.array(arrays["path_alpha_prev"], dtype=float))
+            self.load_prev = float(st["load_prev"])
+        else:
+            self.x_prev, self.load_prev = None, None
+        self.delta_d_prev = float(st.get("delta_d_prev", 0.0))
         self.rate = float(st["rate"])
         self.d_prev = float(st["d_prev"])
         self.dissipation_steps = int(st["dissipation_steps"])

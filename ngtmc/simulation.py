@@ -503,11 +503,12 @@ class Simulation:
 
     # ------------------------------------------------------------------ checkpoints
     def get_state(self) -> dict:
-        """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows."""
+        """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows,
+        and with path following its rule's state (``path``, scalars) and predictor (``arrays``)."""
         return {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
                 "control": self.control_state.as_dict(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
                 "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows],
-                **({"path": self._path.get_state()} if self._path is not None else {})}
+                **({"path": self._path.get_state(), "arrays": self._path.get_arrays()} if self._path is not None else {})}
 
     def set_state(self, st: dict):
         """Resume from a state of :meth:`get_state`."""
@@ -522,9 +523,9 @@ class Simulation:
         self.rows = [dict(r) for r in st["rows"]]
         if self._path is not None:
             if "path" in st:
-                self._path.set_state(st["path"])
+                self._path.set_state(st["path"], st.get("arrays", {}))
             else:  # a state of a run without path following: start the rule from this state
-                self._path.d_prev = self.coupled.dissipation()
+                self._path.set_state({"rate": 0.0, "d_prev": self.coupled.dissipation(), "dissipation_steps": 0})
 
 
 def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,

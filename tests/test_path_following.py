@@ -93,3 +93,23 @@ def test_path_options_are_checked():
         ngtmc.Simulation(_plate(), 0.01, scheme="monolithic", coupled={"path": "dissipation", "crack_advance": -1})
     with pytest.raises(ValueError, match="dissipation"):
         CoupledNewton(ngtmc.Solver(_plate())).solve(0.001, dissipation=0.0)
+
+
+def test_resumed_path_following_continues_the_same_path():
+    """A run stopped after 8 steps and resumed from Simulation.get_state (the rule's scalars and
+    the two states of its secant predictor) takes the same steps as the uninterrupted run."""
+    def sim():
+        return ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7),
+                                scheme="path-following")
+    whole = sim().run().history
+    first = sim()
+    for _ in range(8):
+        first.advance()
+    state = first.get_state()
+    assert set(state["arrays"]) == {"path_u_n", "path_alpha_n", "path_u_prev", "path_alpha_prev"}
+    second = sim()
+    second.set_state(state)
+    resumed = second.run().history
+    assert len(resumed) == len(whole)
+    assert np.allclose(resumed["load"], whole["load"], rtol=1e-6, atol=1e-12)
+    assert np.allclose(resumed["force"], whole["force"], rtol=1e-5, atol=1e-6)

@@ -207,10 +207,12 @@ class RunFolder:
         if not done:
             for k, v in state["solver"].items():
                 arrays["solver__" + k] = np.asarray(v)
+            for k, v in state.get("arrays", {}).items():  # the Simulation's own arrays (path predictor)
+                arrays["state__" + k] = np.asarray(v)
             # everything else of the Simulation's state by name (JSON keeps floats exactly), so the
             # checkpoint does not depend on the layout of that state
             arrays["simulation"] = np.array(json.dumps(jsonable({k: v for k, v in state.items()
-                                                                 if k not in ("solver", "rows")})))
+                                                                 if k not in ("solver", "rows", "arrays")})))
         if snaps is not None:
             for k, v in snaps.state().items():
                 arrays["snap__" + k] = v
@@ -226,7 +228,8 @@ class RunFolder:
         if not ck["done"]:
             solver = {k[len("solver__"):]: v for k, v in d.items() if k.startswith("solver__")}
             if "simulation" in d:
-                ck["state"] = {**json.loads(str(d["simulation"])), "solver": solver, "rows": ck["rows"]}
+                ck["state"] = {**json.loads(str(d["simulation"])), "solver": solver, "rows": ck["rows"],
+                               "arrays": {k[len("state__"):]: v for k, v in d.items() if k.startswith("state__")}}
             else:  # written before 2026-11-24: positional scalars
                 sc = d["scalars"]
                 ck["state"] = {"solver": solver, "t": float(sc[0]), "step": int(sc[1]), "last_delta_wf": float(sc[2]),
