@@ -17,6 +17,12 @@ contact point, reload). A crack starts at the re-entrant corner. What must be se
    the force returns to its first-loading value at u = l_h (about zero);
 4. reloading: softer (the crack is there), up to a **lower peak**, 7.6 kN in the paper.
 
+Two cases (``load_cases``): ``main``, the paper's load-unload-reload schedule above, and
+``monotonic``, 0 -> ``monotonic_to`` = 6.6 mm, which goes past the first-loading peak (the paper's
+first loading ends at 6.3 mm, before the peak of this model at quick) and is compared with the
+first-loading peak of Ambati et al. 2015. ``--set load_cases=monotonic`` runs it alone (the l0
+sweep below).
+
 Geometry (mm; the paper's Fig. 12 is not available, sizes it does not give are our choices)
 -------------------------------------------------------------------------------------------
 * panel: 500 x 500 square without the lower-right 250 x 250 quadrant (Winkler); the bottom edge
@@ -77,14 +83,21 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   curve retraces the unloading one. Damage does grow in the first unloading steps (W_f +7.8 % at
   quick, +21 % at medium, within 0.06 mm of the turning point): the single-pass scheme lags damage
   by one step and the tiny first unloading steps (Eq. 20 after a fast W_f increase) still apply the
-  damage driven by the last loading states.
+  damage driven by the last loading states. The monolithic scheme removes the lag (quick,
+  ``--set load_cases=cyclic --set schedule=0,6.3,6,6.3``, with ``--set scheme=monolithic`` or
+  without): W_f does not change once unloading starts (0.0 against +4.83 N mm, +7.8 %, single-pass),
+  W_f at the turning point is 70.76 N mm against 62.10 (single-pass, 66.93 after its lag) and max
+  alpha 0.483 against 0.412 (0.442); the forces hardly move (17.91 against 17.94 kN at 6.3 mm, 4.48
+  against 4.48 kN unloaded at 6 mm); 153 steps each, 486 against 371 Newton iterations, 84 against
+  55 s. The single-pass scheme's damage at the turning point is thus 12 % low, 5.4 % low after its lag.
 * At u = l_h the force is 4.8 kN on first loading (not "about zero": the third medium between the
   curved indenter and the arm is squeezed over some 20 mm and carries load from about 5.8 mm on;
   approach-only runs gave F(6.0) = 5.4 kN with 2.5 mm void elements and 4.8 kN with 0.5 mm ones at
   the apex), 4.5 kN after unloading (quick -5.9 %, medium -1.5 %): the same within the stiffness
   lost to the damage.
 * Not reproduced: the panel is far stronger than in the paper. At 6.3 mm the first loading has not
-  peaked (17.9 kN quick, 18.2 kN medium, diffuse damage, max alpha 0.41 / 0.67); the crack runs
+  peaked (17.9 kN quick, 18.2 kN medium, diffuse damage, max alpha 0.41 / 0.67: the monotonic case
+  peaks at 6.451 mm at quick and at 6.311 mm at medium, below); the crack runs
   on reloading from 23.6 kN (quick, 6.46 mm) / 20.8 kN (medium, 6.35 mm), against 7.6 kN
   (+211 % / +174 %). The contact is not the cause: the diagnostic variant
   ``--set load_introduction=segment`` (no indenter, no void, the displacement minus the gap imposed
@@ -94,12 +107,70 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   Gc (1 + h / (2 l0)) does (h_band 2 -> 1 mm: factor 1.84 -> 1.42, force ratio sqrt = 1.14,
   measured 1.13); extrapolated to h -> 0 that gives about 17.5 kN, still 2.3 times the paper's.
   What remains is the fracture model with these parameters: the AT-2 strength
-  3 sqrt(3)/16 sqrt(E' Gc / l0) = 14.3 MPa is five times concrete's (Winkler: about 2.7 MPa), and
+  3 sqrt(3)/16 sqrt(E Gc / l0) = 14.3 MPa is five times concrete's (Winkler: about 2.7 MPa), and
   the same model reproduces the three-point bending peak within 10 %. The paper's set-up details
   that could explain 7.6 kN (its l0 is not legible, its figures are missing) are not in its text.
   No parameter was tuned to the reference.
 * Without excluding the contact zone from fracture the arm was crushed under the indenter (see
   the geometry section).
+
+First-loading peak against Ambati et al. 2015 (case ``monotonic``)
+-------------------------------------------------------------------
+* Ambati et al. 2015 (Comput. Mech. 55, Fig. 19) compute this panel with the same AT-2 parameters
+  (l0 = 1.1875 mm, h = 0.5 mm) and load the arm directly; a public reimplementation reads their
+  first-loading peak as about 16 kN. **Thickness reading: 16 kN for the whole 100 mm panel** (the
+  Winkler specimen's thickness, the thickness of this study). The other reading, 16 kN per mm of
+  thickness, is ruled out by the numbers: with the same parameters this model carries 0.23 kN per
+  mm (22.96 kN / 100 mm), 70 times less, and the experiments carry 0.07 kN per mm. Only the force
+  is compared: Ambati's displacement has no gap.
+* Measured at quick (l0 = 1.1875 mm): the monotonic case peaks at **22.96 kN at u = 6.451 mm**
+  (198 steps, 65 s on one core), then drops to 17.2 kN at 6.6 mm (-25 %, max alpha 1, the crack
+  runs from the corner). Against Ambati's 16 kN: **+43.5 %, outside ±15 %** (a strict expected
+  failure of EXPECTED, with this value). The reload peak of case ``main`` (23.6 kN at 6.46 mm) is
+  the same peak, 2.9 % higher: unloading from 6.3 mm, before the peak, leaves the strength alone.
+  Quick does not resolve l0 (h_band = 2 mm = 1.7 l0; toughness overestimate 1 + h/(2 l0) = 1.84).
+  At medium (h_band = 1 mm = 0.84 l0, still above l0/2; ``--resolution medium --set
+  load_cases=monotonic --set monotonic_to=6.5``, 27986 elements) the peak is **18.63 kN at 6.311
+  mm, +16.4 %** against Ambati's 16 kN, just outside ±15 %; the drop follows at once (13.67 kN at
+  6.3148 mm, -27 %, after 238 steps and 216 s, where the run was stopped: the running crack takes
+  steps of 1e-5 mm). The peak falls by 19 % from quick to medium, more than the sqrt of the
+  toughness factors (1.84 -> 1.42: 12 %). Extrapolated to h -> 0 it lies between 14.3 kN (linear
+  in h) and 15.6 kN (medium divided by sqrt(1.42)), -11 % to -2 % against Ambati, who used h = 0.5
+  mm = 0.42 l0: the first-loading peak is consistent with Ambati's once the mesh resolves l0. That
+  range is an estimate; the paper resolution (h_band = 0.5 mm) was not run.
+
+l0 sweep (case ``monotonic``, quick; ``L0_SWEEP``)
+---------------------------------------------------
+AT-2's homogeneous strength 3 sqrt(3)/16 sqrt(E Gc / l0) equals concrete's sigma_t = 2.7 MPa at
+l0 = 27 E Gc / (256 sigma_t^2) = 27 * 25800 * 0.0893 / (256 * 2.7^2) = **33.33 mm** (34.4 mm with
+the plane-strain E / (1 - nu^2)). Swept: today's 1.1875 mm, 4.75 mm (4 x) and 12 mm between,
+and 33.33 mm; each run ``ngtmc run l-panel --resolution quick --set load_cases=monotonic
+--set l0=L0 --no-report`` (the last row adds ``--set h_far=8``), one at a time on one core. Forces
+for the whole 100 mm panel::
+
+    l0 (mm)  strength  h_band  h_band/l0  h_far  elements  peak (kN)  at u (mm)  F(6.6 mm)  steps  wall (s)
+    1.1875   14.3 MPa  2 mm    1.68       25 mm   8516     22.96      6.451      17.2 kN    198     65
+    4.75      7.15     2       0.42       25      8516     16.41      6.310       3.8       214     67
+    12        4.50     2       0.17       25      8516     14.06      6.276       0.55      221     72
+    33.33     2.70     2       0.06       25      8516     11.63      6.259       0.03      210     66
+    33.33     2.70     2       0.06        8     13845     11.55      6.259       0.02       212    118
+
+* **No l0 reaches Winkler's 6.7-7.6 kN band**: the peak falls from 22.96 kN to 11.63 kN as l0 grows
+  28-fold, and at the l0 that gives AT-2 concrete's strength it is still 53 % above 7.6 kN. The
+  peak falls far slower than 1/sqrt(l0) (that would give 4.3 kN at 33.33 mm): the earlier estimate
+  "l0 of about 5-12 mm reaches 7.6 kN" does not hold. l0 = 4.75 mm comes within 3 % of Ambati's
+  16 kN, but Ambati used 1.1875 mm: not a match of that reference.
+* Up to 6.1 mm the curves of all l0 agree within 5 % (4.7-4.8 kN at 6.0 mm, 7.7-8.1 kN at 6.1 mm:
+  the squeezed void and the nearly elastic panel); they part as the damage at the corner grows
+  (10.8-12.8 kN at 6.2 mm), and the peak moves from 6.451 mm to 6.259 mm.
+* Mesh. The band (x 150-260, y 230-320, h_band = 2 mm) resolves l0 >= 4 mm (h <= l0/2); l0 =
+  1.1875 mm is not resolved (h = 1.7 l0, the largest toughness overestimate, 1.84 against 1.21,
+  1.08, 1.03), so its peak is the least reliable and too high. For the large l0 the damage leaves
+  the band: at 6.30 mm, just past the peak of l0 = 33.33 mm, alpha reaches 0.86 just below the
+  band at the corner and exceeds 0.5 from x = 184 to 257 mm; after the peak the crack runs out of
+  the band (x < 150 mm) for every l0 >= 4.75 mm (l0 = 1.1875 mm: alpha > 0.5 reaches x = 176 mm
+  by 6.6 mm). The far mesh (h_far = 25 mm, 0.75 l0 at l0 = 33.33 mm) does not set the peak: with
+  h_far = 8 mm (l0/4) the peak is 11.55 kN, -0.7 %, at the same displacement.
 """
 from __future__ import annotations
 
@@ -138,6 +209,10 @@ PARAMETERS = {
     "clamp_strip": (25.0, "mm", "height of the strip along the clamped edge without fracture (our choice)"),
     "k_u": (50.0, "1/N", "step-size sensitivity of Eq. 20, W_f per unit thickness (paper: 50)"),
     **SOLVER_PARAMETERS,
+    "load_cases": ("both", "-", "'both' (the paper's load-unload-reload case 'main' and the monotonic case 'monotonic'), "
+                   "'cyclic' (case 'main' only) or 'monotonic' (case 'monotonic' only, as in the l0 sweep)"),
+    "monotonic_to": (6.6, "mm", "end of the monotonic case 'monotonic' (0 -> monotonic_to): past the first-loading "
+                     "peak, which the paper's first loading (to 6.3 mm) does not reach at quick"),
     "load_introduction": ("indenter", "-", "'indenter' (paper: an indenter pushes the arm across a 6 mm void) or "
                           "'segment' (diagnostic: no indenter and no void; the schedule minus the gap is imposed on "
                           "the arm's lower face from load_x to its end)"),
@@ -177,7 +252,83 @@ MEASURED = {
     "quick_segment_loading": {"note": "--set load_introduction=segment: no indenter, no void (loads minus the gap)",
                               "elements": 7996, "steps": 160, "wall_time_s": 188, "first_loading_force_at_0.3": 18541,
                               "reload_peak_force": 24400, "reload_peak_load": 0.449},
+    "quick_monotonic": {"note": "case monotonic, 0 -> 6.6 mm (one core, one thread)", "elements": 8516,
+                        "steps": 198, "newton_iterations": 438, "wall_time_s": 65, "peak_force": 22962,
+                        "peak_load": 6.451, "force_at_6.6": 17161, "drop_after_peak": 0.253},
+    "medium_monotonic": {"note": "--set load_cases=monotonic --set monotonic_to=6.5, stopped at 6.3148 mm after the "
+                                 "drop (crack running in steps of 1e-5 mm)", "elements": 27986, "steps": 238,
+                         "wall_time_s": 216, "peak_force": 18632, "peak_load": 6.3106, "force_at_stop": 13675,
+                         "status": "interrupted"},
+    "quick_unload_single_pass": {"note": "--set load_cases=cyclic --set schedule=0,6.3,6,6.3", "steps": 153,
+                                 "newton_iterations": 371, "wall_time_s": 55, "force_at_turning_point": 17936,
+                                 "wf_at_turning_point": 62.10, "unload_wf_lag": 4.83, "max_alpha_after_lag": 0.4415,
+                                 "force_unloaded_at_gap": 4484},
+    "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
+                                "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
+                                "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
+                                "force_unloaded_at_gap": 4483},
 }
+
+#: The l0 sweep (study docstring, "l0 sweep"): case ``monotonic`` (0 -> 6.6 mm) at quick, one run per
+#: row, reproduced by L0_SWEEP_COMMAND with the row's l0 (and h_far where it differs from quick's
+#: 25 mm). Forces in N for the whole 100 mm panel, loads in mm, wall time in s of the case on one
+#: core (one thread). A measurement: no row was chosen to meet a reference.
+L0_SWEEP_COMMAND = ("ngtmc run l-panel --resolution quick --set load_cases=monotonic --set l0={l0} "
+                    "[--set h_far={h_far}] --no-report")
+L0_SWEEP = [
+    {"l0": 1.1875, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 22962, "peak_load": 6.451,
+     "force_at_6.6": 17161, "steps": 198, "wall_time_s": 65},
+    {"l0": 4.75, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 16413, "peak_load": 6.310,
+     "force_at_6.6": 3824, "steps": 214, "wall_time_s": 67},
+    {"l0": 12.0, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 14061, "peak_load": 6.276,
+     "force_at_6.6": 554, "steps": 221, "wall_time_s": 72},
+    {"l0": 33.33, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 11634, "peak_load": 6.259,
+     "force_at_6.6": 32, "steps": 210, "wall_time_s": 66},
+    {"l0": 33.33, "h_band": 2.0, "h_far": 8.0, "elements": 13845, "peak_force": 11554, "peak_load": 6.259,
+     "force_at_6.6": 21, "steps": 212, "wall_time_s": 118},
+]
+#: Winkler's experimental peak band (whole 100 mm panel, N): the paper's 7.6 kN is its upper bound.
+WINKLER_PEAK_BAND = (6700.0, 7600.0)
+#: Concrete's tensile strength (Winkler), MPa: the strength l0_for_strength matches in the sweep.
+SIGMA_T = 2.7
+
+
+def at2_strength(E: float, Gc: float, l0: float) -> float:
+    """Homogeneous (1D) strength of AT-2, MPa: 3 sqrt(3)/16 sqrt(E Gc / l0) (E in MPa, Gc in N/mm,
+    l0 in mm)."""
+    return 3.0 * np.sqrt(3.0) / 16.0 * np.sqrt(E * Gc / l0)
+
+
+def l0_for_strength(E: float, Gc: float, sigma: float) -> float:
+    """The l0 (mm) at which AT-2's homogeneous strength is ``sigma`` (MPa): 27 E Gc / (256 sigma^2)."""
+    return 27.0 * E * Gc / (256.0 * sigma ** 2)
+
+
+def figures(p: dict) -> list[dict]:
+    """The report's figure of the l0 sweep: recorded peaks (L0_SWEEP, quick, far mesh of quick)
+    against l0, with Winkler's band and Ambati's first-loading peak."""
+    rows = [r for r in L0_SWEEP if r["h_far"] == 25.0]
+    l0s = [r["l0"] for r in rows]
+    x = [min(l0s) / 1.2, max(l0s) * 1.2]
+    return [{
+        "title": "First-loading peak against l0 (recorded l0 sweep, quick)",
+        "x_title": "phase-field length l0 (mm)", "y_title": "peak force (N, whole 100 mm panel)", "x_log": True,
+        "caption": ("Peak force of the monotonic case against l0, measured at quick (h_band = 2 mm, so l0 = "
+                    "1.1875 mm is not resolved: h = 1.7 l0) with the commands of the study docstring; recorded "
+                    "data of the study, not computed in this run. l0 = 33.33 mm gives AT-2 the strength 2.7 MPa "
+                    "of concrete. Look for: whether any l0 reaches Winkler's 6.7-7.6 kN band (none does)."),
+        "series": [
+            {"label": "this model, monotonic peak (quick)", "kind": "curve", "x": l0s,
+             "y": [r["peak_force"] for r in rows]},
+            {"label": "Winkler experiments, peak band 6.7-7.6 kN", "kind": "band", "x": x,
+             "y_lower": [WINKLER_PEAK_BAND[0]] * 2, "y_upper": [WINKLER_PEAK_BAND[1]] * 2},
+            {"label": "Ambati et al. 2015, Fig. 19: about 16 kN at l0 = 1.1875 mm", "kind": "points",
+             "x": [1.1875], "y": [16000.0]},
+            {"label": "this model, monotonic peak at medium (h_band = 1 mm)", "kind": "points",
+             "x": [1.1875], "y": [float(MEASURED["medium_monotonic"]["peak_force"])]},
+        ],
+    }]
+
 
 REGIONS = "band|contact_zone|clamp_strip|panel|indenter|void"
 FRACTURE_REGIONS = ["band", "panel"]
@@ -274,19 +425,48 @@ def build_scene(p: dict) -> ngtmc.Scene:
     )
 
 
+LOAD_CASES = {"both": ("main", "monotonic"), "cyclic": ("main",), "monotonic": ("monotonic",)}
+
+
+def _load_cases(p: dict) -> tuple:
+    mode = str(p.get("load_cases", "both"))
+    if mode not in LOAD_CASES:
+        raise ValueError(f"l_panel: load_cases = {mode!r} is not one of {', '.join(map(repr, LOAD_CASES))}")
+    return LOAD_CASES[mode]
+
+
 def cases(p: dict) -> list[Case]:
+    """Case ``main``: the paper's schedule 0 -> 6.3 -> 6 -> 7 mm; case ``monotonic``: 0 ->
+    ``monotonic_to`` (past the first-loading peak). ``load_cases`` selects them."""
     du_max = float(p["du_max"])
-    sched = ngtmc.Schedule(effective_schedule(p))
     shift = float(p["gap"]) - effective_gap(p)
-    return [Case(
-        name="main", label=f"this model (k_u = {float(p['k_u']):g} 1/N, du_max = {du_max:g} mm)",
-        scene=partial(build_scene, dict(p)),
-        schedule=sched,
-        control=ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=min(float(p["du_min"]), du_max)),
-        options=simulation_options(p),
-        snapshot_loads=[x - shift for x in (5.9, 6.1, 6.2, 6.3, 7.0) if x - shift >= 0],
-        parameters={"k_u": float(p["k_u"]), "du_max": du_max},
-    )]
+    control = ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=min(float(p["du_min"]), du_max))
+    which = _load_cases(p)
+    out = []
+    if "main" in which:
+        out.append(Case(
+            name="main", label=f"this model (k_u = {float(p['k_u']):g} 1/N, du_max = {du_max:g} mm)",
+            scene=partial(build_scene, dict(p)),
+            schedule=ngtmc.Schedule(effective_schedule(p)),
+            control=control,
+            options=simulation_options(p),
+            snapshot_loads=[x - shift for x in (5.9, 6.1, 6.2, 6.3, 7.0) if x - shift >= 0],
+            parameters={"k_u": float(p["k_u"]), "du_max": du_max},
+        ))
+    if "monotonic" in which:
+        end = float(p["monotonic_to"]) - shift
+        if not end > 0:
+            raise ValueError(f"l_panel: monotonic_to = {p['monotonic_to']!r} mm does not go past the gap")
+        out.append(Case(
+            name="monotonic", label=f"monotonic to {float(p['monotonic_to']):g} mm (l0 = {float(p['l0']):g} mm)",
+            scene=partial(build_scene, dict(p)),
+            schedule=ngtmc.Schedule([0.0, end]),
+            control=control,
+            options=simulation_options(p),
+            snapshot_loads=[x - shift for x in (6.1, 6.3, 6.45) if 0 <= x - shift < end] + [end],
+            parameters={"k_u": float(p["k_u"]), "du_max": du_max, "l0": float(p["l0"])},
+        ))
+    return out
 
 
 def _data_path(name):
@@ -319,10 +499,21 @@ def references(p: dict) -> list[dict]:
     ]
 
 
+AMBATI_SOURCE = ("Ambati et al. 2015 (Comput. Mech. 55), Fig. 19, L-shaped panel with the same AT-2 parameters: "
+                 "first-loading peak about 16 kN, read as the whole 100 mm panel (see the study docstring)")
+
+
 def targets(p: dict) -> list[dict]:
     scale = float(p["thickness"]) / 100.0
-    return [{"case": "main", "quantity": "reload_peak_force", "value": 7600.0 * scale, "unit": "N",
-             "source": "Ciceri et al. 2026, L-panel text: reload peak 7.6 kN (whole 100 mm panel)", "tolerance": 0.15}]
+    out = []
+    if "main" in _load_cases(p):
+        out.append({"case": "main", "quantity": "reload_peak_force", "value": 7600.0 * scale, "unit": "N",
+                    "source": "Ciceri et al. 2026, L-panel text: reload peak 7.6 kN (whole 100 mm panel)",
+                    "tolerance": 0.15})
+    if "monotonic" in _load_cases(p):
+        out.append({"case": "monotonic", "quantity": "peak_force", "value": 16000.0 * scale, "unit": "N",
+                    "source": AMBATI_SOURCE, "tolerance": 0.15})
+    return out
 
 
 #: What the quick run (the CI run of tests/test_study_l_panel.py) is checked against, one record per
@@ -343,6 +534,16 @@ EXPECTED = {
                           "source": "measured, quick (regression guard)"},
     "force_first_loading_at_gap": {"case": "main", "quantity": "force_first_loading_at_gap", "value": 4765.0,
                                    "unit": "N", "rel": 0.05, "source": "measured, quick (regression guard)"},
+    "monotonic_peak_force_ambati": {
+        "case": "monotonic", "quantity": "peak_force", "value": 16000.0, "unit": "N", "rel": 0.15,
+        "source": AMBATI_SOURCE,
+        "xfail": "quick: monotonic peak measured 22.96 kN at 6.451 mm against Ambati's about 16 kN (+43.5 %); "
+                 "h_band = 2 mm = 1.7 l0 overestimates the toughness by 1 + h/(2 l0) = 1.84; medium (h_band = 1 mm) "
+                 "18.63 kN (+16.4 %), extrapolated to h -> 0 about 14.3-15.6 kN (see the study)"},
+    "monotonic_peak_force": {"case": "monotonic", "quantity": "peak_force", "value": 22962.0, "unit": "N", "rel": 0.05,
+                             "source": "measured, quick (regression guard; l0 = 1.1875 mm)"},
+    "monotonic_peak_load": {"case": "monotonic", "quantity": "peak_load", "value": 6.451, "unit": "mm", "abs": 0.03,
+                            "source": "measured, quick (regression guard; past the paper's turning point 6.3 mm)"},
 }
 
 
@@ -350,13 +551,35 @@ EXPECTED = {
 def post_results(p: dict, history, results: dict) -> dict:
     """Add to the results of case ``main`` the numbers of :func:`phases` (forces in N, loads in mm,
     W_f in N mm), once the history has reached the turning point of the schedule."""
-    if "main" not in results or history is None or not len(history):
+    if history is None or not len(history):
+        return results
+    if "monotonic" in results and "case" in history:
+        m = history[history["case"] == "monotonic"]
+        if len(m):
+            results["monotonic"].update(monotonic_numbers(m))
+    if "main" not in results:
         return results
     h = history[history["case"] == "main"] if "case" in history else history
     if not len(h) or not np.isclose(h["load"].to_numpy(dtype=float), effective_schedule(p)[1], atol=1e-9).any():
         return results
     results["main"].update(phases(h, p))
     return results
+
+
+def monotonic_numbers(hist) -> dict:
+    """Peak of the monotonic case and whether it was passed: ``first_peak_force`` (N) and
+    ``first_peak_load`` (mm, the peak of ngtmc), ``final_force``, ``drop_after_peak`` (1 - final
+    force / peak force) and ``peak_passed`` (the force fell by more than 5 % after the peak)."""
+    h = hist.sort_values("step").reset_index(drop=True)
+    j = peak_index(h["force"])
+    if j is None:
+        return {}
+    fp, ff = float(h["force"].iloc[j]), float(h["force"].iloc[-1])
+    drop = 1.0 - ff / fp if fp > 0 else float("nan")
+    return {"first_peak_force": fp, "first_peak_load": float(h["load"].iloc[j]), "final_force": ff,
+            "final_load": float(h["load"].iloc[-1]), "drop_after_peak": drop,
+            "peak_passed": bool(j < len(h) - 1 and drop > 0.05),
+            "wf_final": float(h["fracture_energy"].iloc[-1]), "max_alpha_final": float(h["max_alpha"].iloc[-1])}
 
 
 def phases(hist, p: dict, settle: float = 0.25) -> dict:

@@ -109,8 +109,14 @@ def _synthetic_l_panel_history(p):
     u1, u2, u3 = S.effective_schedule(p)[1:4]
     loads = np.r_[np.linspace(0.0, u1, 20), np.linspace(u1, u2, 8)[1:], np.linspace(u2, u3, 10)[1:]]
     n = len(loads)
-    return pd.DataFrame({"case": "main", "step": np.arange(n), "load": loads, "force": 3000.0 * loads,
+    main = pd.DataFrame({"case": "main", "step": np.arange(n), "load": loads, "force": 3000.0 * loads,
                          "fracture_energy": np.linspace(0.0, 1.0, n), "max_alpha": np.linspace(0.0, 1.0, n)})
+    mono = np.linspace(0.0, S.cases(dict(p, load_cases="monotonic"))[0].schedule.points[-1], 30)
+    m = len(mono)
+    return pd.concat([main, pd.DataFrame({  # case monotonic: a rise, a peak two thirds along, a drop
+        "case": "monotonic", "step": np.arange(m), "load": mono,
+        "force": 3000.0 * np.minimum(mono, 2 * mono[-1] / 3) * np.where(mono > 2 * mono[-1] / 3, 0.5, 1.0),
+        "fracture_energy": np.linspace(0.0, 1.0, m), "max_alpha": np.linspace(0.0, 1.0, m)})])
 
 
 def _synthetic_contact_histories(p):

@@ -332,3 +332,33 @@ def test_time_split_table():
     assert r["other"] == pytest.approx(20.0)
     meta["results"]["main"].pop("time_split_s")
     assert report.time_split_rows(meta, history, meta["cases"]) == []
+
+
+def test_study_figures_from_metadata(tpb_run):
+    """A study's figures(p), recorded in the metadata as ``figures``, get their own section: each
+    series drawn with its numbers (a band as two traces, the lower one filled to the upper)."""
+    meta = json.loads((tpb_run / "metadata.json").read_text())
+    meta["figures"] = [{"title": "peak against l0", "x_title": "l0 (mm)", "y_title": "peak (N)", "x_log": True,
+                        "caption": "recorded sweep <b>", "series": [
+                            {"label": "peaks", "kind": "curve", "x": [1.0, 4.0], "y": [20.0, 10.0]},
+                            {"label": "band", "kind": "band", "x": [0.5, 5.0], "y_lower": [6.0, 6.0],
+                             "y_upper": [7.0, 7.0]},
+                            {"label": "point", "kind": "points", "x": [1.0], "y": [16.0]}]}]
+    (tpb_run / "metadata.json").write_text(json.dumps(meta))
+    page = report.render_report(tpb_run).read_text(encoding="utf-8")
+    assert "study-figures" in _ids(page) and "fig-study-0" in _ids(page)
+    assert "recorded sweep &lt;b&gt;" in page  # the caption is escaped
+    fig = _fig_data(page)["fig-study-0"]
+    assert fig["layout"]["xaxis"]["type"] == "log"
+    by_name = {}
+    for t in fig["data"]:
+        by_name.setdefault(t["name"], []).append(t)
+    assert by_name["peaks"][0]["y"] == pytest.approx([20.0, 10.0]) and by_name["peaks"][0]["mode"] == "lines+markers"
+    assert by_name["point"][0]["mode"] == "markers"
+    assert [t["y"] for t in by_name["band"]] == [pytest.approx([7.0, 7.0]), pytest.approx([6.0, 6.0])]
+    assert by_name["band"][1]["fill"] == "tonexty"
+
+
+def test_no_study_figures_section_without_figures(tpb_run):
+    page = report.render_report(tpb_run).read_text(encoding="utf-8")
+    assert "study-figures" not in _ids(page)

@@ -234,6 +234,39 @@ def _fig_force(meta, history, cases, styles, log_y=False):
     return {"data": data, "layout": lay}
 
 
+def fig_study(spec: dict) -> dict:
+    """A figure a study adds to its report (its optional ``figures(p)``, recorded in the metadata
+    as ``figures``; docs/study-interface.md): ``title``, ``x_title``, ``y_title``, ``x_log``
+    (bool) and ``series``, each a dict with ``label``, ``kind`` ('curve', 'points' or 'band'),
+    ``x`` and ``y`` (or ``y_lower`` and ``y_upper`` for a band). Units belong in the titles."""
+    data = []
+    for k, ser in enumerate(s for s in spec.get("series") or [] if isinstance(s, dict)):
+        label = str(ser.get("label", f"series {k + 1}"))
+        x = np.asarray(ser.get("x") or [], dtype=float)
+        if ser.get("kind") == "band":
+            lo = np.asarray(ser.get("y_lower") or [], dtype=float)
+            hi = np.asarray(ser.get("y_upper") or [], dtype=float)
+            n = min(len(x), len(lo), len(hi))
+            if n == 0:
+                continue
+            data.append(_line(x[:n], hi[:n], label, "rgba(120,120,120,0.6)", width=0.8, legendgroup=f"s{k}",
+                              showlegend=False, hoverinfo="skip"))
+            data.append(_line(x[:n], lo[:n], label, "rgba(120,120,120,0.6)", width=0.8, legendgroup=f"s{k}",
+                              fill="tonexty", fillcolor="rgba(150,150,150,0.30)"))
+            continue
+        y = np.asarray(ser.get("y") or [], dtype=float)
+        n = min(len(x), len(y))
+        if n == 0:
+            continue
+        points = ser.get("kind") == "points"
+        data.append(_line(x[:n], y[:n], label, (REF_COLORS if points else CASE_COLORS)[k % 5],
+                          mode="markers" if points else "lines+markers", width=2.0))
+    lay = _layout(str(spec.get("title", "")), str(spec.get("x_title", "")), str(spec.get("y_title", "")))
+    if spec.get("x_log"):
+        lay["xaxis"]["type"] = "log"
+    return {"data": data, "layout": lay}
+
+
 def _fig_step_size(history, cases, styles):
     data = []
     for c in cases:

@@ -15,7 +15,7 @@ from .numbers import (
 from .figures import (
     ALPHA_COLORSCALE, FONT, MAX_EDGE_TRIANGLES, MAX_FRAMES, MAX_VERTEX_FRAMES, N_LEVELS, RHO_COLORSCALE,
     _case_style, _fig_energies, _fig_force, _fig_interpolation, _fig_newton, _fig_speed_error,
-    _fig_step_size, _fig_wf_alpha, _level_colors, _same_mesh, mesh_payload)
+    _fig_step_size, _fig_wf_alpha, _level_colors, _same_mesh, fig_study, mesh_payload)
 
 
 def _env():
@@ -142,6 +142,11 @@ def render_report(run_dir, output=None) -> Path:
         figs["fig-wf-alpha"] = _fig_wf_alpha(history, cases, styles)
     figs["fig-newton"] = _fig_newton(history, cases, styles)
     figs["fig-energies"] = _fig_energies(history, cases, styles, features)
+    study_figures = []  # what the study adds (its figures(p), recorded in the metadata)
+    for k, spec in enumerate(s for s in meta.get("figures") or [] if isinstance(s, dict)):
+        fid = f"fig-study-{k}"
+        figs[fid] = fig_study(spec)
+        study_figures.append({"id": fid, "title": str(spec.get("title", "")), "caption": str(spec.get("caption", ""))})
 
     interp = None
     if study == "contact_gamma0":
@@ -243,7 +248,7 @@ def render_report(run_dir, output=None) -> Path:
         "n_rows": int(len(history)),
         "references": [r for r in meta.get("references") or [] if isinstance(r, dict)],
         "key_rows": key_number_rows(meta, history), "ref_peaks": ref_peaks,
-        "case_nums": case_nums, "interp": interp,
+        "case_nums": case_nums, "interp": interp, "study_figures": study_figures,
         "speed": speed, "speed_meaningful": speed_meaningful,
         "time_split": time_split_rows(meta, history, cases),
         "mesh_info": mesh_info, "has_snapshots": bool(mesh_info),

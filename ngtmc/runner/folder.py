@@ -173,6 +173,9 @@ class RunFolder:
             "host": {"platform": platform.platform(), "cpu_count": os.cpu_count(),
                      "threads": _threads()},
         }
+        figures = list(mod.figures(p)) if hasattr(mod, "figures") else []
+        if figures:  # what the study adds to its report (docs/study-interface.md)
+            meta["figures"] = figures
         if self.features:
             meta["features"] = dict(self.features)
         if self.error:
