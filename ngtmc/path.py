@@ -122,11 +122,10 @@ class DissipationPath:
         direction = 1.0 if l_b > l_a else -1.0
         guess = du if self.rate <= 0 else min(du, dD / self.rate)
         load_guess = load_n + direction * guess
-        if self.delta_d_prev > 0:
-            load_sec = self._secant(dD / self.delta_d_prev)
-            if load_sec is not None:
-                load_guess = load_sec
-        if load_guess != getattr(self, "_secant_load", None):
+        load_sec = self._secant(dD / self.delta_d_prev) if self.delta_d_prev > 0 else None
+        if load_sec is not None:
+            load_guess = load_sec
+        else:
             res = s.solve_displacement(load_guess)
             sim._add(info, res)
             if not res.converged:
@@ -185,7 +184,6 @@ class DissipationPath:
         [alpha_n, 1]), with the boundary values of ``load`` (default: the secant load
         lambda_n + ratio (lambda_n - lambda_{n-1})). Returns the load, or None (state unchanged)
         when there is no previous state, the ratio is outside (0, 2], or an element would invert."""
-        self._secant_load = None
         if self.x_prev is None or not (0.0 < ratio <= 2.0):
             return None
         s = self.sim.solver
@@ -203,7 +201,6 @@ class DissipationPath:
             return None
         s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + ratio * (a_n - a_p), a_n, 1.0)
         s._r_valid = False
-        self._secant_load = load
         return load
 
     def accepted(self, step_size: float):
