@@ -72,10 +72,11 @@ def _cmd_list() -> int:
         try:
             mod = load_study(name)
             res = ", ".join(mod.RESOLUTIONS)
-            print(f"{name.replace('_', '-'):24s} {getattr(mod, 'TITLE', '')}  [resolutions: {res}; "
-                  f"default {getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}]")
         except Exception as e:  # a broken study must not hide the others
             print(f"{name.replace('_', '-'):24s} (cannot be loaded: {type(e).__name__}: {e})")
+            continue
+        print(f"{name.replace('_', '-'):24s} {getattr(mod, 'TITLE', '')}  [resolutions: {res}; "
+              f"default {getattr(mod, 'DEFAULT_RESOLUTION', 'quick')}]")
     return 0
 
 
@@ -189,6 +190,15 @@ def run_script(name: str, argv=None) -> int:
 
 
 def main(argv=None) -> int:
+    try:
+        return _main(argv)
+    except BrokenPipeError:  # output piped into a program that stopped reading (``ngtmc list | head``)
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+
+
+def _main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "list":
         return _cmd_list()

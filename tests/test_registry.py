@@ -93,3 +93,12 @@ def test_entry_points_register_other_packages_studies(tmp_path, monkeypatch):
         load_study("broken")
     with pytest.raises(StudyError, match="valid studies: .*plugged_study"):
         load_study("no-such-study")
+
+
+def test_list_into_a_closed_pipe_is_quiet():
+    """``ngtmc list | head -1``: the reader stops early; no traceback, and no study reported as
+    'cannot be loaded' because its line could not be written."""
+    p = subprocess.run(f"{sys.executable} -m ngtmc list | head -1", shell=True, capture_output=True, text=True,
+                       timeout=120)
+    assert p.stdout.count("\n") == 1 and "cannot be loaded" not in p.stdout
+    assert "Traceback" not in p.stderr and "BrokenPipe" not in p.stderr
