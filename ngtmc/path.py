@@ -23,11 +23,14 @@ applied: it bounds the dissipation per step, which the path now does itself):
    (:meth:`ngtmc.coupled.CoupledNewton.solve` with ``dissipation``). Its load must stay on the
    current segment of the schedule; if it would pass the segment's end, the step is a
    displacement step to that end.
-3. After a dissipation step the next step is a dissipation step too (no displacement attempt:
+3. A dissipation step that moves the load by more than du_max is solved again with the
+   dissipation scaled down in proportion (0.9 du_max / |load change|); if the load still moves
+   too far, the crack has stopped and the step is a displacement step of du.
+4. After a dissipation step the next step is a dissipation step too (no displacement attempt:
    in stable growth after a crack run, a fixed-load Newton creeps where the dissipation-controlled
    one converges in a few iterations: the crack advances element by element, each advance a small
-   snap-back), until a dissipation step moves the load by more than du_max: the crack has
-   stopped, and that step is replaced by a displacement step of du.
+   snap-back; at the paper's resolution the fixed-load Newton also stalled before the peak),
+   unless the step had to be scaled below a quarter of dD (slow growth).
 
 dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a failed step and
 doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
@@ -133,24 +136,34 @@ class DissipationPath:
                 return False, info
         keep = s.get_state()
         lo, hi = min(l_a, l_b), max(l_a, l_b)
+        du_max = sim.control.du_max
+        slow = False
         r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
         sim._add(info, r)
+        if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
+            # the load moved more than a displacement step may: dissipate less, in proportion
+            # (the same bound on the load change as a displacement step, at converged damage)
+            dD_small = 0.9 * dD * du_max / abs(self.coupled.load_solved - load_n)
+            s.set_state(keep)
+            r = self.coupled.solve(load_guess, dissipation=dD_small, load_bounds=(lo, hi))
+            sim._add(info, r)
+            if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
+                # still too far: the crack has stopped growing; a displacement step instead,
+                # and leave dissipation control
+                self.dissipating = False
+                s.set_state(saved)
+                ok, info = self._fixed(sch.load(t_new), info)
+                if ok:
+                    info["t_new"] = t_new
+                return ok, info
+            slow = dD_small < 0.25 * dD  # slow growth: try displacement steps again next
         if r.converged:
             H_trial = s.trial_history()
             if np.all(np.isfinite(H_trial)):
-                if abs(self.coupled.load_solved - load_n) > sim.control.du_max * (1 + 1e-9):
-                    # the crack has stopped growing: the load moved more than a displacement
-                    # step may; take that step instead and leave dissipation control
-                    self.dissipating = False
-                    s.set_state(saved)
-                    ok, info = self._fixed(sch.load(t_new), info)
-                    if ok:
-                        info["t_new"] = t_new
-                    return ok, info
                 info["H_trial"] = H_trial
                 info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
                 self.dissipation_steps += 1
-                self.dissipating = True
+                self.dissipating = not slow
                 return True, info
             r.message = "history not finite (J <= 0 at a history point)"
         s.set_state(keep)
