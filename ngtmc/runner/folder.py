@@ -237,7 +237,7 @@ class RunFolder:
                 sc = d["scalars"]
                 ck["state"] = {"solver": solver, "t": float(sc[0]), "step": int(sc[1]), "last_delta_wf": float(sc[2]),
                                "wf_prev": float(sc[3]), "elapsed": float(sc[4]),
-                               "control": json.loads(str(d["control"])), "rows": ck["rows"]}
+                               "control": json.loads(str(d["control"])), "rows": ck["rows"], "arrays": {}}
         ck["snap"] = {k[len("snap__"):]: v for k, v in d.items() if k.startswith("snap__")}
         ck["snaparr"] = {k[len("snaparr__"):]: v for k, v in d.items() if k.startswith("snaparr__")}
         return ck
