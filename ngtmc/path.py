@@ -31,6 +31,9 @@ applied: it bounds the dissipation per step, which the path now does itself):
    one converges in a few iterations: the crack advances element by element, each advance a small
    snap-back; at the paper's resolution the fixed-load Newton also stalled before the peak),
    unless the step had to be scaled below a quarter of dD (slow growth).
+5. Every step starts from the secant predictor x_n + r (x_n - x_{n-1}) through the last two
+   accepted states (alpha kept in [alpha_n, 1]; r the ratio of the load or dissipation
+   increments, at most 2), or, without it, from the u solve with alpha_{n-1}.
 
 dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a failed step and
 doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
@@ -54,7 +57,8 @@ class DissipationPath:
     Parameters
     ----------
     sim : Simulation
-        With ``scheme="monolithic"`` on a scene with fracture regions.
+        With ``scheme="path-following"`` (or "monolithic" and ``coupled={"path": "dissipation"}``)
+        on a scene with fracture regions.
     crack_advance : float, optional
         Crack advance per dissipation step, mm (default: the mean l0 of the fracture regions).
     """
