@@ -23,9 +23,9 @@ at the minimum increment raises :class:`StepFailure`, which carries the history 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from pathlib import Path
 import math
-import sys
 import time
 from typing import Callable, Iterator, Sequence
 
@@ -67,7 +67,7 @@ class SimulationResult:
     solver: Solver
     wall_time: float
     #: the run folder, for ``simulate(..., out_dir=...)``; None for a run kept in memory
-    run_dir: "Path | None" = None
+    run_dir: Path | None = None
 
     @property
     def peak_force(self) -> float:
