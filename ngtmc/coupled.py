@@ -149,7 +149,7 @@ class CoupledNewton:
         return 0.5 * float(a @ self._wf_matvec(a))
 
     def _assemble_wf(self):
-        key = self.s._design_key() if hasattr(self.s, "_design_key") else None
+        key = self.s._design_key()
         if getattr(self, "_wf_key", object()) == key and self._wf_form is not None:
             return
         s = self.s
@@ -169,13 +169,17 @@ class CoupledNewton:
         self._wf_y.data = self._wf_form.mat * self._wf_x
         return self._wf_y.FV().NumPy().copy()
 
-    def reference_toughness(self) -> float:
-        """Mean Gc over the fracture regions, N/mm (for converting a crack advance into a
-        dissipation increment)."""
+    def fracture_mean(self, cf) -> float:
+        """Mean of the coefficient ``cf`` over the fracture regions (area or volume weighted)."""
         s = self.s
         frac = s.mesh.Materials(s._frac_re)
         area = ngs.Integrate(ngs.CoefficientFunction(1.0), s.mesh, definedon=frac)
-        return float(ngs.Integrate(s.Gc, s.mesh, definedon=frac)) / float(area)
+        return float(ngs.Integrate(cf, s.mesh, definedon=frac)) / float(area)
+
+    def reference_toughness(self) -> float:
+        """Mean Gc over the fracture regions, N/mm (for converting a crack advance into a
+        dissipation increment)."""
+        return self.fracture_mean(self.s.Gc)
 
     # ------------------------------------------------------------------ solve
     def solve(self, load: float, alpha_upper: np.ndarray | None = None, dissipation: float | None = None,

@@ -68,10 +68,7 @@ class DissipationPath:
         self.coupled = c = sim.coupled
         s = sim.solver
         if crack_advance is None:
-            import ngsolve as ngs
-            frac = s.mesh.Materials(s._frac_re)
-            area = float(ngs.Integrate(ngs.CoefficientFunction(1.0), s.mesh, definedon=frac))
-            crack_advance = float(ngs.Integrate(s.l0, s.mesh, definedon=frac)) / area
+            crack_advance = c.fracture_mean(s.l0)
         self.crack_advance = float(crack_advance)
         self.gc_ref = c.reference_toughness()
         #: dD / d(load) of the last accepted step, N mm per mm of load (per thickness in 2D)
