@@ -23,6 +23,7 @@ at the minimum increment raises :class:`StepFailure`, which carries the history 
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 import math
@@ -45,6 +46,11 @@ SCHEMES = ("single-pass", "staggered", "monolithic", "path-following")
 #: Units of the history columns (force and energies are for the scene thickness in 2D); defined
 #: once, in :mod:`ngtmc.runfiles`.
 HISTORY_UNITS = _HISTORY_UNITS
+
+
+#: Under path following, displacement steps are at most 1/PATH_STEPS of the load path
+#: (``Schedule.total_time``, mm) unless ``coupled={"du_max": ...}`` says otherwise.
+PATH_STEPS = 50
 
 
 class StepFailure(RuntimeError):
@@ -163,6 +169,7 @@ class Simulation:
         if self.path not in (None, "dissipation"):
             raise ValueError(f"coupled path = {self.path!r} is not one of None (load control), 'dissipation'")
         self.crack_advance = copt.pop("crack_advance", None)
+        path_du_max = copt.pop("du_max", None)
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
         if scheme in ("monolithic", "path-following") and self.solver.alpha is not None:
@@ -172,6 +179,18 @@ class Simulation:
         if self.coupled is not None and self.path == "dissipation":
             from .path import DissipationPath
             self._path = DissipationPath(self, self.crack_advance)
+            # a displacement step of the monolithic scheme carries no lag, so its size does not set
+            # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
+            # by the du_max of the lagged schemes' Eq. 20
+            if path_du_max is None:
+                path_du_max = max(control.du_max, schedule.total_time / PATH_STEPS)
+            from .materials import check_number
+            check_number("coupled du_max (largest load increment under path following)", path_du_max, "mm")
+            if not float(path_du_max) >= control.du_min:
+                raise ValueError(f"coupled du_max = {path_du_max!r} mm must be >= du_min = {control.du_min} mm")
+            self.control = control = dataclasses.replace(control, du_max=float(path_du_max))
+        elif path_du_max is not None:
+            raise ValueError("coupled du_max applies to path following only (scheme='path-following')")
         self.t = 0.0
         self.step = 0
         self.rows: list[dict] = []

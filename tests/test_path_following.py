@@ -113,3 +113,21 @@ def test_resumed_path_following_continues_the_same_path():
     assert len(resumed) == len(whole)
     assert np.allclose(resumed["load"], whole["load"], rtol=1e-6, atol=1e-12)
     assert np.allclose(resumed["force"], whole["force"], rtol=1e-5, atol=1e-6)
+
+
+def test_displacement_steps_of_path_following_are_bounded_by_the_curve_resolution():
+    """Under path following a displacement step carries no lag, so its bound is 1/PATH_STEPS of
+    the load path (or ``coupled["du_max"]``), not the lagged schemes' du_max: the first step of
+    the plate (elastic, nothing dissipates yet) is 0.012/50 mm with du_max = 1e-4 mm."""
+    from ngtmc.simulation import PATH_STEPS
+    control = ngtmc.AdaptiveStepControl(du_max=1e-4, du_min=1e-7)
+    sim = ngtmc.Simulation(_plate(), 0.012, control, scheme="path-following")
+    assert sim.control.du_max == pytest.approx(0.012 / PATH_STEPS)
+    row = sim.advance()
+    assert row["step_size"] == pytest.approx(0.012 / PATH_STEPS, rel=1e-9)
+    own = ngtmc.Simulation(_plate(), 0.012, control, scheme="path-following", coupled={"du_max": 5e-4})
+    assert own.control.du_max == 5e-4
+    with pytest.raises(ValueError, match="du_min"):
+        ngtmc.Simulation(_plate(), 0.012, control, scheme="path-following", coupled={"du_max": 1e-9})
+    with pytest.raises(ValueError, match="path following only"):
+        ngtmc.Simulation(_plate(), 0.012, control, scheme="monolithic", coupled={"du_max": 5e-4})

@@ -183,3 +183,27 @@ def test_sparse_cholesky_reproduces_only_to_round_off():
     scale = np.abs(lu[0]).max()
     for x in ch:
         assert np.abs(x - lu[0]).max() <= 1e-13 * scale
+
+
+def test_gmres_function_tolerance_is_absolute():
+    """``ngsolve.krylovspace.GMRes(tol=)`` is an absolute tolerance on the preconditioned residual
+    (it is passed on as ``atol``; ``reltol`` is the relative one). A small right-hand side is then
+    'solved' by the zero vector, silently: here a Poisson load of 1e-9 with tol = 1e-6 returns
+    x = 0. A Newton correction of a nearly converged step is such a small right-hand side, so the
+    coupled solver uses ``GMResSolver(tol=relative)`` (:class:`ngtmc.coupled.CoupledNewton`,
+    ``gmres_rtol``); measured 2026-11-25, ngsolve 6.2.2608."""
+    from netgen.occ import unit_square
+    from ngsolve.krylovspace import GMRes, GMResSolver
+    m = ngs.Mesh(unit_square.GenerateMesh(maxh=0.1))
+    V = ngs.H1(m, order=1, dirichlet="left")
+    u, v = V.TnT()
+    a = ngs.BilinearForm(ngs.grad(u) * ngs.grad(v) * ngs.dx).Assemble()
+    f = ngs.LinearForm(1e-9 * v * ngs.dx).Assemble()
+    exact = a.mat.CreateColVector()
+    exact.data = a.mat.Inverse(V.FreeDofs(), inverse="umfpack") * f.vec
+    ex = exact.FV().NumPy()
+    pre = a.mat.CreateSmoother(V.FreeDofs())
+    absolute = GMRes(a.mat, f.vec, pre=pre, tol=1e-6, printrates=False)
+    assert np.linalg.norm(ex) > 1e-9 and np.linalg.norm(absolute.FV().NumPy()) == 0.0
+    relative = GMResSolver(mat=a.mat, pre=pre, tol=1e-6, atol=1e-300, maxiter=200, printrates=False).Solve(rhs=f.vec)
+    assert np.linalg.norm(relative.FV().NumPy() - ex) <= 1e-5 * np.linalg.norm(ex)
