@@ -67,6 +67,11 @@ STALL_FACTOR = 0.25
 #: and :attr:`CoupledNewton.floor_worst`.
 FLOOR_RTOL = 1e-6
 
+#: Levenberg shifts mu tried in turn when the line search along the Newton direction fails: the
+#: free diagonal of the tangent is scaled by (1 + mu), which shortens the step in near-singular
+#: modes most (the squeezed-void vertex of FLOOR_RTOL).
+LEVENBERG_SHIFTS = (1e-4, 1e-2, 1.0)
+
 
 class CoupledNewton:
     """Newton on (u, alpha) for a :class:`~ngtmc.solver.Solver` with a phase field.
@@ -94,6 +99,8 @@ class CoupledNewton:
         self._inv_u = None
         #: solves accepted at the residual floor (FLOOR_RTOL), and their largest relative residual
         self.floor_accepts = 0
+        #: Newton iterations that took a Levenberg step (LEVENBERG_SHIFTS)
+        self.levenberg_steps = 0
         self.floor_worst = 0.0
         self.gmres_iterations = []  # GMRES iterations of each block-GMRES solve (diagnostics)
         self._wf_form = None
@@ -286,6 +293,62 @@ class CoupledNewton:
             self.floor_worst = max(self.floor_worst, res_u / max(reac, r_ref))
             return accept(it, held)
 
+        def direction(lin, free, fixed_step, a_cur, g):
+            """Newton (or Levenberg) direction (dx, dlambda) from the factorization ``lin``; None
+            when the damage does not respond to the load (path following)."""
+            wN = w.FV().NumPy()
+            wN[:] = fixed_step
+            tmp.data = r + self.form.mat * w
+            lin(tmp, dx)
+            dxN = np.where(free, -dx.FV().NumPy(), fixed_step)
+            dlam = 0.0
+            if path:
+                # response to a unit load change: the boundary values move by d target / d lambda
+                h = 1e-6 * max(abs(lam), 1e-3)
+                dt_dl = (s.dirichlet_target(lam + h) - s.dirichlet_target(lam - h)) / (2 * h)
+                wN[:] = 0.0
+                wN[:nu] = np.where(dir_u, dt_dl, 0.0)
+                unit = wN.copy()
+                tmp.data = self.form.mat * w
+                lin(tmp, w)
+                bN = np.where(free, -w.FV().NumPy(), unit)
+                grad = self._wf_matvec(a_cur)
+                slope = float(grad @ bN[nu:])
+                if not abs(slope) > 0.0:
+                    return None
+                dlam = -(g + float(grad @ dxN[nu:])) / slope
+                dxN += dlam * bN
+            return dxN, dlam
+
+        def search(dxN, dlam, merit0, scale_u, scale_a, lam0):
+            """Backtracking from x0 along (dx, dlambda) on the merit function, guard J > 0 and a
+            finite residual; returns (accepted, load). The residual of an accepted iterate is
+            left in tmp; a rejected search leaves the last trial in x (the caller restores x0)."""
+            t0 = time.perf_counter()
+            step = 1.0
+            lam_t = lam0
+            try:
+                for _ in range(s.newton.max_line_search):
+                    xN[:] = x0.FV().NumPy() + step * dxN
+                    lam_t = lam0 + step * dlam
+                    if path:
+                        xN[:nu][dir_u] = s.dirichlet_target(lam_t)[dir_u]
+                    s.u.vec.FV().NumPy()[:] = xN[:nu]
+                    if s.min_J() > 0.0:
+                        self.form.Apply(x, tmp)
+                        tN = tmp.FV().NumPy()
+                        if np.all(np.isfinite(tN)):
+                            if lifted:
+                                return True, lam_t
+                            rmu, rma, _ = split(xN, tN)
+                            merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2 + ((constraint(xN) / scale_g) ** 2 if path else 0.0)
+                            if merit <= (1.0 - 1e-4 * step) * merit0:
+                                return True, lam_t
+                    step *= 0.5
+                return False, lam0
+            finally:
+                tm["line_search"] += time.perf_counter() - t0
+
         merits = []
         have_r = False  # True when the line search left the residual of the accepted iterate in tmp
         for it in range(1, self.max_iterations + 1):
@@ -345,61 +408,37 @@ class CoupledNewton:
             wN[:nu] = rem
             wN[nu:] = np.where(held == -1, a_low - a_cur, np.where(held == 1, a_up - a_cur, 0.0))
             fixed_step = wN.copy()
-            tmp.data = r + self.form.mat * w
             t0 = time.perf_counter()
             lin = self._factorize(free)
             t1 = time.perf_counter()
-            lin(tmp, dx)
-            dxN = dx.FV().NumPy()
-            dxN[:] = np.where(free, -dxN, fixed_step)
-            dlam = 0.0
-            if path:
-                # response to a unit load change: the boundary values move by d target / d lambda
-                h = 1e-6 * max(abs(lam), 1e-3)
-                dt_dl = (s.dirichlet_target(lam + h) - s.dirichlet_target(lam - h)) / (2 * h)
-                wN[:] = 0.0
-                wN[:nu] = np.where(dir_u, dt_dl, 0.0)
-                unit = wN.copy()
-                tmp.data = self.form.mat * w
-                lin(tmp, w)
-                bN = np.where(free, -w.FV().NumPy(), unit)
-                grad = self._wf_matvec(a_cur)
-                slope = float(grad @ bN[nu:])
-                if not abs(slope) > 0.0:
-                    return failed(it, "dissipation control: the damage does not respond to the load here")
-                dlam = -(g + float(grad @ dxN[nu:])) / slope
-                dxN += dlam * bN
+            d = direction(lin, free, fixed_step, a_cur, g)
             t2 = time.perf_counter()
             tm["factorization"] += t1 - t0
             tm["solve"] += t2 - t1
             solve_time += t2 - t0
-            # backtracking on the merit function, guard J > 0 and finite residual
-            t0 = time.perf_counter()
+            if d is None:
+                return failed(it, "dissipation control: the damage does not respond to the load here")
             x0.data = x
             lam0 = lam
-            step = 1.0
-            accepted = False
-            for _ in range(s.newton.max_line_search):
-                xN[:] = x0.FV().NumPy() + step * dxN
-                lam = lam0 + step * dlam
-                if path:
-                    target = s.dirichlet_target(lam)
-                    xN[:nu][dir_u] = target[dir_u]
-                s.u.vec.FV().NumPy()[:] = xN[:nu]
-                if s.min_J() > 0.0:
-                    self.form.Apply(x, tmp)
-                    tN = tmp.FV().NumPy()
-                    if np.all(np.isfinite(tN)):
-                        if lifted:
-                            accepted = True
-                            break
-                        rmu, rma, _ = split(xN, tN)
-                        merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2 + ((constraint(xN) / scale_g) ** 2 if path else 0.0)
-                        if merit <= (1.0 - 1e-4 * step) * merit0:
-                            accepted = True
-                            break
-                step *= 0.5
-            tm["line_search"] += time.perf_counter() - t0
+            accepted, lam = search(*d, merit0, scale_u, scale_a, lam0)
+            if not accepted and not lifted:
+                # the Newton direction does not reduce the merit function (a near-singular or
+                # indefinite tangent): Levenberg steps, the tangent's free diagonal scaled by 1 + mu
+                for mu in LEVENBERG_SHIFTS:
+                    t0 = time.perf_counter()
+                    lin = self._shifted(free, mu)
+                    t1 = time.perf_counter()
+                    d = direction(lin, free, fixed_step, a_cur, g)
+                    t2 = time.perf_counter()
+                    tm["factorization"] += t1 - t0
+                    tm["solve"] += t2 - t1
+                    solve_time += t2 - t0
+                    if d is None:
+                        break
+                    accepted, lam = search(*d, merit0, scale_u, scale_a, lam0)
+                    if accepted:
+                        self.levenberg_steps += 1
+                        break
             have_r = accepted
             if not accepted:
                 xN[:] = x0.FV().NumPy()
@@ -408,6 +447,8 @@ class CoupledNewton:
                 if done is not None:
                     return done
                 return failed(it, "coupled line search failed" if not lifted else "no admissible step towards the boundary values")
+            if path:
+                target = s.dirichlet_target(lam)
             if path and not (lam_lo <= lam <= lam_hi):
                 self.load_out_of_bounds = lam
                 return failed(it, f"dissipation control: the load {lam:.6g} mm left [{lam_lo:.6g}, {lam_hi:.6g}] mm")
@@ -420,6 +461,32 @@ class CoupledNewton:
         s = self.s
         return (res_u <= rtol * max(reac, r_ref) + s.newton.atol and res_a <= tol_a
                 and (scale_g is None or abs(g) <= 1e-6 * scale_g))
+
+    def _shifted(self, free: np.ndarray, mu: float):
+        """UMFPACK factorization of the tangent with its diagonal on the ``free`` dofs scaled by
+        (1 + mu) (Levenberg); the assembled matrix is restored. Returns solve(rhs, out)."""
+        A = self.form.mat
+        vals = A.AsVector().FV().NumPy()
+        if getattr(self, "_diag_pos_n", None) != vals.size:
+            _, cols, rowptr = A.CSR()
+            cols = np.asarray(cols).astype(np.int64)
+            rowptr = np.asarray(rowptr).astype(np.int64)
+            rows = np.repeat(np.arange(rowptr.size - 1), np.diff(rowptr))
+            on = cols == rows
+            self._diag_pos = np.nonzero(on)[0]
+            self._diag_row = rows[on]
+            self._diag_pos_n = vals.size
+        pos, row = self._diag_pos, self._diag_row
+        keep = vals[pos].copy()
+        vals[pos] = keep + np.where(free[row], mu * np.abs(keep), 0.0)
+        try:
+            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
+        finally:
+            vals[pos] = keep
+
+        def solve(rhs, out):
+            out.data = inv * rhs
+        return solve
 
     def _diagonal_scale(self) -> np.ndarray:
         """1 / diagonal of the assembled tangent's alpha-alpha block (per unit of R_alpha)."""
