@@ -1,4 +1,4 @@
-"""Exact gradients of a recorded load path: the discrete adjoint of the single-pass staggered scheme.
+"""Exact gradients of a recorded load path: the discrete adjoint of the scheme that was run.
 
     path = record_path(scene, Schedule([0, 0.2]), AdaptiveStepControl(du_max=0.0125),
                        newton=NewtonOptions(rtol=1e-12))
@@ -8,8 +8,21 @@
     g["rho"]          # dJ/drho, one entry per element (numpy array, J-unit per unit density)
     g["E"]            # dJ/dE, J-unit per MPa
 
-What is differentiated (see ``docs/sensitivities.md`` for the derivation): the scheme that
-:class:`~ngtmc.simulation.Simulation` actually solved with ``scheme="single-pass"``. At every recorded
+Schemes: ``record_path(..., scheme=...)`` with
+
+* ``"single-pass"`` (the default): this module, described below;
+* ``"monolithic"`` (load control) and ``"path-following"`` (dissipation control where the crack
+  grows): :mod:`ngtmc.sensitivities_coupled`, reached through the same functions (``record_path``
+  returns a :class:`~ngtmc.sensitivities_coupled.CoupledPath`; ``replay``, ``gradient``,
+  ``directional_fd``, ``taylor_test`` dispatch on it). There every step is the converged coupled
+  solve (u_n, alpha_n) with the step's own history H_n(u_n) and the bounds alpha_{n-1} <= alpha_n
+  <= 1 as active sets; held fixed are the step types and, per step, the load lambda_n of a
+  displacement step or the dissipation target dD_n of a dissipation step (whose load is then a
+  state variable, differentiated through the dissipation constraint);
+* ``"staggered"``: not differentiated (refused).
+
+What is differentiated for ``scheme="single-pass"`` (see ``docs/sensitivities.md`` for the
+derivation): the scheme that :class:`~ngtmc.simulation.Simulation` actually solved. At every recorded
 load step n, with the imposed displacement lambda_n held fixed,
 
 1. alpha_n = P_n(A(H_{n-1})^{-1} f(H_{n-1})), P_n the projection onto [alpha_{n-1}, 1];
@@ -277,10 +290,14 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     """Run ``scene`` through ``schedule`` (adaptive steps as in :class:`~ngtmc.simulation.Simulation`)
     and store every accepted state for :func:`gradient`.
 
-    ``options`` go to :class:`~ngtmc.simulation.Simulation`; only ``scheme="single-pass"`` (the paper's
-    scheme, the default) can be differentiated. For gradients that agree with finite differences to
-    1e-4, converge Newton tightly, e.g. ``newton=NewtonOptions(rtol=1e-12)``. ``checkpoint_every``:
-    store only every k-th state (see :class:`Path`). Returns a :class:`Path`."""
+    ``options`` go to :class:`~ngtmc.simulation.Simulation`; ``scheme="single-pass"`` (the paper's
+    scheme, the default), ``"monolithic"`` and ``"path-following"`` can be differentiated (the two
+    monolithic ones by :mod:`ngtmc.sensitivities_coupled`, which returns a
+    :class:`~ngtmc.sensitivities_coupled.CoupledPath`; no checkpointing there). For gradients that
+    agree with finite differences to 1e-4, converge Newton tightly, e.g.
+    ``newton=NewtonOptions(rtol=1e-12)``, and for the monolithic schemes also the phase field,
+    ``coupled={"alpha_tol": 1e-12}``. ``checkpoint_every``: store only every k-th state (see
+    :class:`Path`). Returns a :class:`Path`."""
     if checkpoint_every is not None and int(checkpoint_every) < 1:
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
     scheme = options.get("scheme", "single-pass")
@@ -903,8 +920,11 @@ def differentiate(scene: Scene, schedule: Schedule | float, objective: Objective
                   control: AdaptiveStepControl | None = None,
                   wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0"), **options) -> tuple[dict, Path]:
     """One call: run ``scene`` through ``schedule`` (:func:`record_path`, ``options`` as there) and
-    return (``gradient(path, objective, wrt)``, path). Newton defaults to ``rtol=1e-12`` here."""
+    return (``gradient(path, objective, wrt)``, path). Newton defaults to ``rtol=1e-12`` here, and
+    for the monolithic schemes the coupled solver's ``alpha_tol`` to 1e-12."""
     options.setdefault("newton", NewtonOptions(rtol=1e-12))
+    if options.get("scheme") in ("monolithic", "path-following"):
+        options["coupled"] = {"alpha_tol": 1e-12, **(options.get("coupled") or {})}
     path = record_path(scene, schedule, control, **options)
     return gradient(path, objective, wrt), path
 

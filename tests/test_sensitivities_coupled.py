@@ -188,6 +188,17 @@ def test_path_following_gradients_through_the_snap_back(plate_path):
     _check(path, "path following, notched plate")
 
 
+def test_path_following_taylor_remainder_is_quadratic(plate_path):
+    """|J(p + eps d) - J(p) - eps dJ.d| falls as eps^2 (external work, rho + Gc together)."""
+    path = plate_path
+    d = {"rho": 0.1 * np.random.default_rng(2).standard_normal(path.rho.size), "Gc": 0.02}
+    g = S.gradient(path, S.ExternalWork(), wrt=("rho", "Gc"))
+    t = S.taylor_test(path, S.ExternalWork(), d, g, eps_list=(4e-3, 2e-3, 1e-3, 5e-4))
+    print("\nTaylor test (path following, ExternalWork, rho + Gc): remainders",
+          [f"{r:.2e}" for r in t["remainder"]], "orders", [f"{o:.2f}" for o in t["order"]])
+    assert all(1.8 <= o <= 2.3 for o in t["order"])
+
+
 def test_path_following_gradients_contact(contact_path):
     path = contact_path
     assert path.dissipation_steps.sum() >= 5 and path.loads[-1] == pytest.approx(0.2)
