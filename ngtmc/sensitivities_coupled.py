@@ -60,7 +60,8 @@ from .materials import deformation_gradient
 from .scene import Scene
 from .simulation import Simulation
 
-__all__ = ["CoupledPath", "record_coupled_path", "replay_coupled", "coupled_gradient", "COUPLED_SCHEMES"]
+__all__ = ["CoupledPath", "record_coupled_path", "replay_coupled", "coupled_gradient", "alpha_residual_pieces", "held_sets",
+           "COUPLED_SCHEMES"]
 
 #: schemes whose paths this module differentiates
 COUPLED_SCHEMES = ("monolithic", "path-following")
@@ -206,7 +207,7 @@ def replay_coupled(path: CoupledPath, rho=None, parameters=None) -> CoupledPath:
 
 
 # ====================================================================== adjoint engine
-def alpha_residual_pieces(s, c, w):
+def alpha_residual_pieces(s, w):
     """(CF, measure) pairs of <R_alpha(u, alpha; H, p), w>, the alpha rows of the coupled residual
     of :meth:`ngtmc.coupled.CoupledNewton._build_form` contracted with ``w`` (a phase-field
     GridFunction, or the test function to assemble the rows themselves), at the solver's fields
@@ -234,7 +235,7 @@ class _CoupledEngine:
         s = self.s = eng.s
         self.c = coupled
         self.w_a = ngs.GridFunction(s.fes_a)      # alpha part of the step adjoint
-        self.alpha_forms = eng._scalar_forms(alpha_residual_pieces(s, coupled, self.w_a), with_alpha=False)
+        self.alpha_forms = eng._scalar_forms(alpha_residual_pieces(s, self.w_a), with_alpha=False)
         # derivative of <R_alpha, w_a> with respect to H_{n-1} (per unit weight) where the max kept it
         self.dH_cf = eng.frac_ind * (-2.0) * (1.0 - s.alpha) * self.w_a
         # D(a) = 1/2 int Gc (a^2 / l0 + l0 |grad a|^2): its partials in rho and the parameters
