@@ -1,4 +1,4 @@
-"""Exact gradients of a recorded load path: the discrete adjoint of the single-pass staggered scheme.
+"""Exact gradients of a recorded load path: the discrete adjoint of the scheme that was run.
 
     path = record_path(scene, Schedule([0, 0.2]), AdaptiveStepControl(du_max=0.0125),
                        newton=NewtonOptions(rtol=1e-12))
@@ -8,8 +8,21 @@
     g["rho"]          # dJ/drho, one entry per element (numpy array, J-unit per unit density)
     g["E"]            # dJ/dE, J-unit per MPa
 
-What is differentiated (see ``docs/sensitivities.md`` for the derivation): the scheme that
-:class:`~ngtmc.simulation.Simulation` actually solved with ``scheme="single-pass"``. At every recorded
+Schemes: ``record_path(..., scheme=...)`` with
+
+* ``"single-pass"`` (the default): this module, described below;
+* ``"monolithic"`` (load control) and ``"path-following"`` (dissipation control where the crack
+  grows): :mod:`ngtmc.sensitivities_coupled`, reached through the same functions (``record_path``
+  returns a :class:`~ngtmc.sensitivities_coupled.CoupledPath`; ``replay``, ``gradient``,
+  ``directional_fd``, ``taylor_test`` dispatch on it). There every step is the converged coupled
+  solve (u_n, alpha_n) with the step's own history H_n(u_n) and the bounds alpha_{n-1} <= alpha_n
+  <= 1 as active sets; held fixed are the step types and, per step, the load lambda_n of a
+  displacement step or the dissipation target dD_n of a dissipation step (whose load is then a
+  state variable, differentiated through the dissipation constraint);
+* ``"staggered"``: not differentiated (refused).
+
+What is differentiated for ``scheme="single-pass"`` (see ``docs/sensitivities.md`` for the
+derivation): the scheme that :class:`~ngtmc.simulation.Simulation` actually solved. At every recorded
 load step n, with the imposed displacement lambda_n held fixed,
 
 1. alpha_n = P_n(A(H_{n-1})^{-1} f(H_{n-1})), P_n the projection onto [alpha_{n-1}, 1];
@@ -277,18 +290,28 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     """Run ``scene`` through ``schedule`` (adaptive steps as in :class:`~ngtmc.simulation.Simulation`)
     and store every accepted state for :func:`gradient`.
 
-    ``options`` go to :class:`~ngtmc.simulation.Simulation`; only ``scheme="single-pass"`` (the paper's
-    scheme, the default) can be differentiated. For gradients that agree with finite differences to
-    1e-4, converge Newton tightly, e.g. ``newton=NewtonOptions(rtol=1e-12)``. ``checkpoint_every``:
-    store only every k-th state (see :class:`Path`). Returns a :class:`Path`."""
+    ``options`` go to :class:`~ngtmc.simulation.Simulation`; ``scheme="single-pass"`` (the paper's
+    scheme, the default), ``"monolithic"`` and ``"path-following"`` can be differentiated (the two
+    monolithic ones by :mod:`ngtmc.sensitivities_coupled`, which returns a
+    :class:`~ngtmc.sensitivities_coupled.CoupledPath`; no checkpointing there). For gradients that
+    agree with finite differences to 1e-4, converge Newton tightly, e.g.
+    ``newton=NewtonOptions(rtol=1e-12)``, and for the monolithic schemes also the phase field,
+    ``coupled={"alpha_tol": 1e-12}``. ``checkpoint_every``: store only every k-th state (see
+    :class:`Path`). Returns a :class:`Path`."""
     if checkpoint_every is not None and int(checkpoint_every) < 1:
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
-    if options.get("scheme", "single-pass") != "single-pass":
-        raise ValueError("record_path: only scheme='single-pass' (the paper's scheme) can be differentiated so far")
+    scheme = options.get("scheme", "single-pass")
+    if scheme not in ("single-pass", "monolithic", "path-following"):
+        raise ValueError(f"record_path: scheme={scheme!r} cannot be differentiated so far; the schemes with an "
+                         f"adjoint are 'single-pass', 'monolithic' and 'path-following'")
     tractions = [ld.label for ld in scene.loads if isinstance(ld, Traction)]
     if tractions:
         raise ValueError(f"record_path: the adjoint does not handle Traction loads (force control) so far: "
                          f"{tractions}; use displacement loads (DisplacementLoad, DisplacementField)")
+    if scheme != "single-pass":
+        from .sensitivities_coupled import record_coupled_path
+        return record_coupled_path(scene, schedule, control, newton=newton, checkpoint_every=checkpoint_every,
+                                   **options)
     t0 = time.perf_counter()
     sim = Simulation(scene, schedule, control, newton=newton, **options)
     s = sim.solver
@@ -313,7 +336,12 @@ def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = 
     :func:`gradient`, e.g. ``{"E": 1010.0, "gamma0": 2e-4}``). Unnamed values are those of ``path``.
 
     Uses the solver of ``path`` (its fields are overwritten). Raises RuntimeError if Newton fails at a
-    step. Returns a new :class:`Path` (sharing the solver)."""
+    step. Returns a new :class:`Path` (sharing the solver). A path of a monolithic scheme is replayed
+    by :func:`ngtmc.sensitivities_coupled.replay_coupled` (same step types, loads and dissipation
+    targets)."""
+    if getattr(path, "coupled", None) is not None:
+        from .sensitivities_coupled import replay_coupled
+        return replay_coupled(path, rho, parameters)
     s = path.solver
     t0 = time.perf_counter()
     new_rho = path.rho.copy() if rho is None else np.asarray(rho, dtype=float).copy()
@@ -370,6 +398,13 @@ class Objective:
     def seeds(self, path: Path, n: int) -> Seeds | None:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def load_seeds(self, path: Path) -> np.ndarray:
+        """dJ/dlambda_n, n = 0..N (explicit dependence on the recorded loads; J-unit per mm). Needed
+        only where the load is an unknown: the dissipation steps of a path-following path
+        (:mod:`ngtmc.sensitivities_coupled`)."""
+        raise NotImplementedError(f"{type(self).__name__} gives no derivative with respect to the loads "
+                                  f"(load_seeds), which the dissipation steps of a path-following path need")
+
     def __add__(self, other):
         return _Combination([(1.0, self), (1.0, other)])
 
@@ -396,6 +431,9 @@ class _Combination(Objective):
 
     def value(self, path):
         return sum(c * o.value(path) for c, o in self.terms)
+
+    def load_seeds(self, path):
+        return sum(c * np.asarray(o.load_seeds(path), dtype=float) for c, o in self.terms)
 
     def seeds(self, path, n):
         out = Seeds()
@@ -429,6 +467,9 @@ class ReactionAtStep(Objective):
     def seeds(self, path, n):
         return Seeds(force=1.0) if n == _step_index(path, self.step) else None
 
+    def load_seeds(self, path):
+        return np.zeros(path.n_steps + 1)
+
 
 class ComplianceAtStep(Objective):
     """J = F_n lambda_n, N mm: the work of the reaction on the imposed displacement at step ``step``
@@ -445,6 +486,12 @@ class ComplianceAtStep(Objective):
 
     def seeds(self, path, n):
         return Seeds(force=float(path.loads[n])) if n == _step_index(path, self.step) else None
+
+    def load_seeds(self, path):
+        out = np.zeros(path.n_steps + 1)
+        n = _step_index(path, self.step)
+        out[n] = path.forces[n]
+        return out
 
 
 class ExternalWork(Objective):
@@ -467,6 +514,14 @@ class ExternalWork(Objective):
     def seeds(self, path, n):
         return Seeds(force=float(self._weights(path)[n]))
 
+    def load_seeds(self, path):
+        F = np.asarray(path.forces, dtype=float)
+        out = np.zeros_like(F)
+        out[1:] += (F[1:] + F[:-1]) / 2   # + lambda_n in (lambda_n - lambda_{n-1})
+        out[:-1] -= (F[1:] + F[:-1]) / 2  # - lambda_n in (lambda_{n+1} - lambda_n)
+        out[0] = 0.0
+        return out
+
 
 class FinalFractureEnergy(Objective):
     """J = W_f at the last step, N mm (Eq. 19 times the thickness, as the history's
@@ -487,6 +542,9 @@ class FinalFractureEnergy(Objective):
         if id(s) not in cache:
             cache[id(s)] = (s, fracture.fracture_energy_density(s.alpha, s.Gc, s.l0))
         return Seeds(cfs=[(cache[id(s)][1], s._frac_re, 1.0)])
+
+    def load_seeds(self, path):
+        return np.zeros(path.n_steps + 1)
 
 
 class UserObjective(Objective):
@@ -509,6 +567,10 @@ class UserObjective(Objective):
         cf = self.density(path.solver, n)
         return None if cf is None else Seeds(cfs=[(cf, self.region, 1.0)])
 
+    def load_seeds(self, path):
+        """Zero: the density may depend on the fields, rho and the parameters, not on the load."""
+        return np.zeros(path.n_steps + 1)
+
     def value(self, path):
         total = 0.0
         for n in range(1, path.n_steps + 1):
@@ -522,7 +584,9 @@ class UserObjective(Objective):
 class ForceCurveObjective(Objective):
     """J = phi(F_1, ..., F_N), a function of the recorded reaction forces (e.g. the misfit to a
     measured curve, for calibration). ``phi(forces, loads) -> (value, dphi/dforces)``, forces and
-    loads arrays of length N + 1 (index 0 = unloaded state).
+    loads arrays of length N + 1 (index 0 = unloaded state); phi may return dphi/dloads as a third
+    item (needed on the dissipation steps of a path-following path, where the loads depend on
+    the design).
 
     :meth:`least_squares` builds the usual misfit 1/2 sum_n (F_n - F_meas(lambda_n))^2, N^2, with
     F_meas interpolated linearly in the measured (load, force) points."""
@@ -539,7 +603,9 @@ class ForceCurveObjective(Objective):
         def phi(forces, loads):
             r = forces - np.interp(loads, ml, mf)
             r[0] = 0.0
-            return 0.5 * float(r @ r), r
+            h = 1e-7 * max(float(np.ptp(ml)), 1e-300)  # slope of the interpolant (mean of both sides at a node)
+            slope = (np.interp(loads + h, ml, mf) - np.interp(loads - h, ml, mf)) / (2 * h)
+            return 0.5 * float(r @ r), r, -r * slope
 
         return cls(phi, unit="N^2")
 
@@ -550,6 +616,12 @@ class ForceCurveObjective(Objective):
         if not hasattr(path, "_phi_cache") or path._phi_cache[0] is not self:
             path._phi_cache = (self, np.asarray(self.phi(path.forces, path.loads)[1], dtype=float))
         return Seeds(force=float(path._phi_cache[1][n]))
+
+    def load_seeds(self, path):
+        out = self.phi(path.forces, path.loads)
+        if len(out) < 3:
+            return super().load_seeds(path)
+        return np.asarray(out[2], dtype=float)
 
 
 def evaluate(path: Path, objective: Objective) -> float:
@@ -698,6 +770,40 @@ def _wrt_keys(solver, wrt):
     return out
 
 
+class _Accumulator:
+    """The sums dJ/drho (one entry per element) and dJ/dp of a reverse sweep."""
+
+    def __init__(self, solver: Solver, wrt: tuple, keys: list):
+        self.want_rho = "rho" in wrt
+        self.keys = keys
+        self.rho = np.zeros(solver.rho.space.ndof)
+        self.par = {k: 0.0 for _, k in keys}
+
+    def add(self, forms, sign=1.0, alpha_acc=None):
+        """Add ``sign`` times the partial derivatives of a :class:`_FormSet` (assembled now) with
+        respect to rho and the parameters; with ``alpha_acc``, add its alpha partial there."""
+        if self.want_rho:
+            forms["rho"].Assemble()
+            self.rho += sign * forms["rho"].vec.FV().NumPy()
+        for _, k in self.keys:
+            forms[k].Assemble()
+            self.par[k] += sign * float(np.sum(forms[k].vec.FV().NumPy()))
+        if alpha_acc is not None and "alpha" in forms:
+            forms["alpha"].Assemble()
+            alpha_acc += sign * forms["alpha"].vec.FV().NumPy()
+
+    def result(self, value: float, t0: float, forward_time: float) -> dict:
+        """The dict returned by :func:`gradient`."""
+        out = {"value": value}
+        if self.want_rho:
+            out["rho"] = self.rho
+        for name, k in self.keys:
+            out[name] = self.par[k]
+        out["time"] = time.perf_counter() - t0
+        out["forward_time"] = forward_time
+        return out
+
+
 def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0")) -> dict:
     """dJ/drho and dJ/dparameters of ``objective`` on the recorded ``path`` by one reverse sweep.
 
@@ -708,7 +814,11 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
 
     The derivative is exact for the discrete scheme with the recorded load steps and active sets
     held fixed (see the module docstring). Only the solver's fields are changed; the solver is
-    left in the final state of the path."""
+    left in the final state of the path. A path of a monolithic scheme is differentiated by
+    :func:`ngtmc.sensitivities_coupled.coupled_gradient`."""
+    if getattr(path, "coupled", None) is not None:
+        from .sensitivities_coupled import coupled_gradient
+        return coupled_gradient(path, objective, wrt)
     t0 = time.perf_counter()
     wrt = tuple(wrt)
     s = path.solver
@@ -719,25 +829,13 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
     N = path.n_steps
     t = s.thickness
     free = s._free_np
-    g_rho = np.zeros(s.rho.space.ndof)
-    g_par = {k: 0.0 for _, k in keys}
+    acc = _Accumulator(s, wrt, keys)
+    add_scalar = acc.add
     has_a = s.alpha is not None
     eta = np.zeros(s.irs.ndof)                      # adjoint density of H_n (per unit quadrature weight)
     abar_carry = np.zeros(s.fes_a.ndof) if has_a else None
     Kinv = None
     Ainv = None
-
-    def add_scalar(forms, sign=1.0, alpha_acc=None):
-        nonlocal g_rho
-        if "rho" in wrt:
-            forms["rho"].Assemble()
-            g_rho += sign * forms["rho"].vec.FV().NumPy()
-        for _, k in keys:
-            forms[k].Assemble()
-            g_par[k] += sign * float(np.sum(forms[k].vec.FV().NumPy()))
-        if alpha_acc is not None and "alpha" in forms:
-            forms["alpha"].Assemble()
-            alpha_acc += sign * forms["alpha"].vec.FV().NumPy()
 
     for n in range(N, 0, -1):
         st_prev = path.state(n - 1)  # (may recompute a segment: before the solver fields are set)
@@ -814,23 +912,19 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
                 eng._irs_tmp.Interpolate(eng.frac_ind * 2 * (eng.a_trial - 1) * eng.mu)
                 eta = eta - eng._irs_tmp.vec.FV().NumPy()
                 add_scalar(eng.alpha_forms, -1.0)
-    out = {"value": value}
-    if "rho" in wrt:
-        out["rho"] = g_rho
-    for name, k in keys:
-        out[name] = g_par[k]
     path.activate(N)
-    out["time"] = time.perf_counter() - t0
-    out["forward_time"] = path.forward_time
-    return out
+    return acc.result(value, t0, path.forward_time)
 
 
 def differentiate(scene: Scene, schedule: Schedule | float, objective: Objective,
                   control: AdaptiveStepControl | None = None,
                   wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0"), **options) -> tuple[dict, Path]:
     """One call: run ``scene`` through ``schedule`` (:func:`record_path`, ``options`` as there) and
-    return (``gradient(path, objective, wrt)``, path). Newton defaults to ``rtol=1e-12`` here."""
+    return (``gradient(path, objective, wrt)``, path). Newton defaults to ``rtol=1e-12`` here, and
+    for the monolithic schemes the coupled solver's ``alpha_tol`` to 1e-12."""
     options.setdefault("newton", NewtonOptions(rtol=1e-12))
+    if options.get("scheme") in ("monolithic", "path-following"):
+        options["coupled"] = {"alpha_tol": 1e-12, **(options.get("coupled") or {})}
     path = record_path(scene, schedule, control, **options)
     return gradient(path, objective, wrt), path
 
