@@ -118,11 +118,12 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
     solve = c.solve
 
     def recording_solve(load, alpha_upper=None, dissipation=None, load_bounds=None):
+        floors = c.floor_accepts
         res = solve(load, alpha_upper, dissipation, load_bounds)
         last.clear()
         if res.converged:
             last.update(u=s.u.vec.FV().NumPy().copy(), alpha=s.alpha.vec.FV().NumPy().copy(),
-                        load=float(c.load_solved), dissipation=dissipation)
+                        load=float(c.load_solved), dissipation=dissipation, floor=c.floor_accepts > floors)
         return res
 
     c.solve = recording_solve  # instance attribute: the simulation and its path rule call this one
@@ -130,6 +131,7 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
     forces = [s.reaction()]
     loads = [0.0]
     targets = [np.nan]
+    floor_steps = []
 
     def grab(sim_, row):
         n = len(states)
@@ -141,6 +143,8 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
                              f"scheme='path-following' or smaller steps")
         states.append(_S._capture(s))
         forces.append(float(row["force"]))
+        if last["floor"]:
+            floor_steps.append(n)
         dD = last["dissipation"]
         targets.append(np.nan if dD is None else float(dD))
         loads.append(last["load"] if dD is not None else float(row["load"]))
@@ -150,6 +154,13 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
         result = sim.run(callbacks=[grab])
     finally:
         del c.solve
+    if floor_steps:
+        import warnings
+        from .coupled import FLOOR_RTOL
+        warnings.warn(f"record_path: {len(floor_steps)} step(s) ({floor_steps[:10]}) were accepted at the residual "
+                      f"floor of the coupled Newton (relative residual up to {c.floor_worst:.2g}, FLOOR_RTOL = "
+                      f"{FLOOR_RTOL:g}), not at the solver's rtol: the gradient is exact only to about that level there",
+                      stacklevel=2)
     return CoupledPath(solver=s, loads=np.asarray(loads), states=states, forces=np.asarray(forces),
                        rho=s.rho.vec.FV().NumPy().copy(), parameters=_S._snapshot_parameters(s),
                        forward_time=time.perf_counter() - t0, history=result.history, coupled=c,
