@@ -72,6 +72,9 @@ FLOOR_RTOL = 1e-6
 #: modes most (the squeezed-void vertex of FLOOR_RTOL).
 LEVENBERG_SHIFTS = (1e-4, 1e-2, 1.0)
 
+#: A Newton step accepted at a step length below WEAK_STEP is compared with Levenberg steps.
+WEAK_STEP = 1.0 / 16
+
 
 class CoupledNewton:
     """Newton on (u, alpha) for a :class:`~ngtmc.solver.Solver` with a phase field.
@@ -339,13 +342,13 @@ class CoupledNewton:
                         tN = tmp.FV().NumPy()
                         if np.all(np.isfinite(tN)):
                             if lifted:
-                                return True, lam_t
+                                return True, lam_t, step, math.nan
                             rmu, rma, _ = split(xN, tN)
                             merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2 + ((constraint(xN) / scale_g) ** 2 if path else 0.0)
                             if merit <= (1.0 - 1e-4 * step) * merit0:
-                                return True, lam_t
+                                return True, lam_t, step, merit
                     step *= 0.5
-                return False, lam0
+                return False, lam0, 0.0, math.inf
             finally:
                 tm["line_search"] += time.perf_counter() - t0
 
@@ -420,10 +423,13 @@ class CoupledNewton:
                 return failed(it, "dissipation control: the damage does not respond to the load here")
             x0.data = x
             lam0 = lam
-            accepted, lam = search(*d, merit0, scale_u, scale_a, lam0)
-            if not accepted and not lifted:
-                # the Newton direction does not reduce the merit function (a near-singular or
-                # indefinite tangent): Levenberg steps, the tangent's free diagonal scaled by 1 + mu
+            accepted, lam, step, merit = search(*d, merit0, scale_u, scale_a, lam0)
+            if not lifted and (not accepted or step < WEAK_STEP):
+                # the Newton direction does not reduce the merit function, or only along a small
+                # fraction of it (a near-singular or indefinite tangent): Levenberg steps, the
+                # tangent's free diagonal scaled by 1 + mu; a weak Newton step is kept if no
+                # Levenberg step does better
+                kept = (xN.copy(), tmp.FV().NumPy().copy(), lam, merit) if accepted else None
                 for mu in LEVENBERG_SHIFTS:
                     t0 = time.perf_counter()
                     lin = self._shifted(free, mu)
@@ -435,10 +441,19 @@ class CoupledNewton:
                     solve_time += t2 - t0
                     if d is None:
                         break
-                    accepted, lam = search(*d, merit0, scale_u, scale_a, lam0)
-                    if accepted:
+                    ok, lam_l, step_l, merit_l = search(*d, merit0, scale_u, scale_a, lam0)
+                    if _DEBUG:
+                        print(f"    levenberg mu {mu:g}: accepted {ok} step {step_l:g} merit {merit_l:.3e} "
+                              f"(newton step {step:g} merit {merit:.3e})", flush=True)
+                    if ok and merit_l < merit:
+                        accepted, lam, merit = True, lam_l, merit_l
+                        kept = None
                         self.levenberg_steps += 1
                         break
+                if kept is not None:
+                    xN[:], tmp.FV().NumPy()[:], lam, merit = kept
+                    s.u.vec.FV().NumPy()[:] = xN[:nu]
+                    accepted = True
             have_r = accepted
             if not accepted:
                 xN[:] = x0.FV().NumPy()

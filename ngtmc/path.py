@@ -37,7 +37,10 @@ applied: it bounds the dissipation per step, which the path now does itself):
 
 dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a failed step and
 doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
-regions, N/mm).
+regions, N/mm), times a growth factor: where the damage grows stably (the load goes on in the
+direction of the schedule) and a dissipation step converged in at most GROWTH_ITERATIONS Newton
+iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base
+(back to 1 after a snap-back step, a displacement step or a cut-back).
 
 Units: mm, N, MPa; D per mm of thickness in 2D.
 """
@@ -47,7 +50,16 @@ import math
 
 import numpy as np
 
-__all__ = ["DissipationPath"]
+__all__ = ["DissipationPath", "GROWTH_MAX", "GROWTH_ITERATIONS"]
+
+#: dD grows by 2 after each dissipation step of stable growth (the load went on in the direction
+#: of the schedule) that took at most GROWTH_ITERATIONS Newton iterations and no cut-back, up to
+#: GROWTH_MAX times its base value; a snap-back step (the load went back), a displacement step or a
+#: cut-back resets it. Where damage grows diffusely (the post-failure tail, under the indenter) a
+#: step dissipates without moving a crack tip, and the base dD of about l0 of crack would take
+#: hundreds of steps there.
+GROWTH_MAX = 16.0
+GROWTH_ITERATIONS = 6
 
 
 class DissipationPath:
@@ -84,11 +96,16 @@ class DissipationPath:
         self.load_n = s.load
         self.x_prev, self.load_prev = None, None
         self.delta_d_prev = 0.0
+        #: growth factor of dD (1 .. GROWTH_MAX): doubled after each easy dissipation step of
+        #: stable growth, back to 1 after a snap-back step or a cut-back
+        self.growth = 1.0
+        self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
 
     @property
     def target(self) -> float:
-        """Dissipation per step dD, N mm (per mm of thickness in 2D), at the current scale."""
-        return self.gc_ref * self.crack_advance * self.sim.control_state.scale
+        """Dissipation per step dD, N mm (per mm of thickness in 2D), at the current scale and
+        growth factor."""
+        return self.gc_ref * self.crack_advance * self.sim.control_state.scale * self.growth
 
     def _segment(self):
         """(t_start, t_end) of the schedule segment the simulation is on."""
@@ -165,6 +182,7 @@ class DissipationPath:
                 info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
                 self.dissipation_steps += 1
                 self.dissipating = not slow
+                self._last_kind = "dissipation"
                 return True, info
             r.message = "history not finite (J <= 0 at a history point)"
         s.set_state(keep)
@@ -217,10 +235,17 @@ class DissipationPath:
         s._r_valid = False
         return load
 
-    def accepted(self, step_size: float):
-        """After an accepted step of |load change| ``step_size`` (mm): update the rate dD/d(load)
+    def accepted(self, step_size: float, iterations: int = 0, cutbacks: int = 0):
+        """After an accepted step of |load change| ``step_size`` (mm), ``iterations`` Newton
+        iterations and ``cutbacks`` cut-backs: update the rate dD/d(load), the growth factor of dD
         and the last two states of the secant predictor."""
         s = self.sim.solver
+        forward = (s.load - self.load_n) * self._direction() > 0
+        if cutbacks or self._last_kind != "dissipation" or not forward:
+            self.growth = 1.0
+        elif iterations <= GROWTH_ITERATIONS:
+            self.growth = min(GROWTH_MAX, 2.0 * self.growth)
+        self._last_kind = None
         d = self.coupled.dissipation()
         delta = d - self.d_prev
         self.d_prev = d
@@ -233,9 +258,15 @@ class DissipationPath:
         else:
             self.rate = math.inf if delta > 0 else self.rate
 
+    def _direction(self) -> float:
+        """+1 where the schedule segment the simulation is on raises the load, else -1."""
+        t0, t1 = self._segment()
+        sch = self.sim.schedule
+        return 1.0 if sch.load(t1) >= sch.load(t0) else -1.0
+
     def get_state(self) -> dict:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
-        return {"rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+        return {"growth": self.growth, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
                 "delta_d_prev": self.delta_d_prev}
 
@@ -267,3 +298,4 @@ class DissipationPath:
         self.d_prev = float(st["d_prev"])
         self.dissipation_steps = int(st["dissipation_steps"])
         self.dissipating = bool(st.get("dissipating", False))
+        self.growth = float(st.get("growth", 1.0))

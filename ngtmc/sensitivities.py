@@ -988,17 +988,22 @@ def directional_derivative(grad: dict, direction: dict) -> float:
 
 def taylor_test(path: Path, objective: Objective, direction: dict, grad: dict, eps_list=(4e-2, 2e-2, 1e-2, 5e-3)) -> dict:
     """Remainders |J(p + eps d) - J(p) - eps <dJ, d>| for decreasing eps; they shrink as eps^2 when
-    the gradient is right. Returns {"eps": [...], "remainder": [...], "order": [...]} (observed
-    orders between consecutive eps)."""
+    the gradient is right. Returns {"eps": [...], "remainder": [...], "order": [...], "switches":
+    [...]} (observed orders between consecutive eps; history points whose branch of the max differs
+    from the path's at each eps: a remainder across a switch is not that of a derivative).
+
+    The path's own states are read before the replays (which overwrite the solver's fields)."""
     J0 = grad["value"]
     dJ = directional_derivative(grad, direction)
-    rem = []
+    rem, switches = [], []
     for eps in eps_list:
-        J = objective.value(_perturbed(path, direction, eps))
+        pert = _perturbed(path, direction, eps)
+        J = objective.value(pert)
         rem.append(abs(J - J0 - eps * dJ))
+        switches.append(active_set_changes(path, pert)["history"])
     path.activate()
     orders = [float(np.log(rem[i] / rem[i + 1]) / np.log(eps_list[i] / eps_list[i + 1])) for i in range(len(rem) - 1)]
-    return {"eps": list(eps_list), "remainder": rem, "order": orders}
+    return {"eps": list(eps_list), "remainder": rem, "order": orders, "switches": switches}
 
 
 __all__ += ["Seeds", "directional_derivative", "active_sets", "active_set_changes"]

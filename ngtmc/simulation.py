@@ -456,7 +456,7 @@ class Simulation:
         self.last_delta_wf = wf - self._wf_prev
         self._wf_prev = wf
         if self._path is not None:
-            self._path.accepted(step_size)
+            self._path.accepted(step_size, totals["newton_iterations"], cutbacks)
         self._report_progress(row)
         return row
 
