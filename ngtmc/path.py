@@ -39,8 +39,9 @@ dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a 
 doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
 regions, N/mm), times a growth factor: where the damage grows stably (the load goes on in the
 direction of the schedule) and a dissipation step converged in at most GROWTH_ITERATIONS Newton
-iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base
-(back to 1 after a snap-back step, a displacement step or a cut-back).
+iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base;
+after a displacement step the factor is GROWTH_START (below 1: fine samples at the peak), and it
+doubles back to 1 along a snap-back; a cut-back caps it at 1.
 
 Units: mm, N, MPa; D per mm of thickness in 2D.
 """
@@ -50,7 +51,7 @@ import math
 
 import numpy as np
 
-__all__ = ["DissipationPath", "GROWTH_MAX", "GROWTH_ITERATIONS"]
+__all__ = ["DissipationPath", "GROWTH_MAX", "GROWTH_ITERATIONS", "GROWTH_START"]
 
 #: dD grows by 2 after each dissipation step of stable growth (the load went on in the direction
 #: of the schedule) that took at most GROWTH_ITERATIONS Newton iterations and no cut-back, up to
@@ -60,6 +61,12 @@ __all__ = ["DissipationPath", "GROWTH_MAX", "GROWTH_ITERATIONS"]
 #: hundreds of steps there.
 GROWTH_MAX = 16.0
 GROWTH_ITERATIONS = 6
+
+#: After a displacement step dD is GROWTH_START times its base (so the first dissipation steps,
+#: where the peak of the curve lies, sample it finely), and it doubles with each dissipation step
+#: up to the base (snap-back steps) or up to GROWTH_MAX (stable growth, as above). With the base dD
+#: from the start the quick three-point bending's sampled peak was 1.2 % below the converged one.
+GROWTH_START = 0.25
 
 
 class DissipationPath:
@@ -96,9 +103,8 @@ class DissipationPath:
         self.load_n = s.load
         self.x_prev, self.load_prev = None, None
         self.delta_d_prev = 0.0
-        #: growth factor of dD (1 .. GROWTH_MAX): doubled after each easy dissipation step of
-        #: stable growth, back to 1 after a snap-back step or a cut-back
-        self.growth = 1.0
+        #: growth factor of dD (GROWTH_START .. GROWTH_MAX, module docstring)
+        self.growth = GROWTH_START
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
 
     @property
@@ -241,8 +247,12 @@ class DissipationPath:
         and the last two states of the secant predictor."""
         s = self.sim.solver
         forward = (s.load - self.load_n) * self._direction() > 0
-        if cutbacks or self._last_kind != "dissipation" or not forward:
-            self.growth = 1.0
+        if self._last_kind != "dissipation":
+            self.growth = GROWTH_START
+        elif cutbacks:
+            self.growth = min(self.growth, 1.0)
+        elif not forward:
+            self.growth = min(1.0, 2.0 * self.growth)
         elif iterations <= GROWTH_ITERATIONS:
             self.growth = min(GROWTH_MAX, 2.0 * self.growth)
         self._last_kind = None
@@ -298,4 +308,4 @@ class DissipationPath:
         self.d_prev = float(st["d_prev"])
         self.dissipation_steps = int(st["dissipation_steps"])
         self.dissipating = bool(st.get("dissipating", False))
-        self.growth = float(st.get("growth", 1.0))
+        self.growth = float(st.get("growth", GROWTH_START))
