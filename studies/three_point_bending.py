@@ -212,6 +212,12 @@ PARAMETERS = {
     "split": ("vol-dev-J", "-", "tension/compression split (ngtmc.splits.SPLITS): 'vol-dev-J' (paper), "
                                 "'vol-dev-small', 'vol-dev-log', 'spectral', 'none'"),
     "formulation": ("hybrid", "-", "where the split acts: 'hybrid' (history only; paper) or 'anisotropic'"),
+    "notch_shape": ("flat", "-", "'flat' (notch_width wide, flat tip), 'v' (V-notch of the same depth and mouth "
+                                 "width, sharp tip) or 'slit' (h_band wide, the narrowest the mesh resolves, flat tip)"),
+    "indenter_exclusion": (0.0, "mm", "half width and depth of a rectangle of the beam top under the load (region "
+                                      "'load_zone', either loading) where fracture is excluded; 0: none"),
+    "support_exclusion": (True, "-", "fracture excluded in the support zones (True); False: the support_zone region "
+                                     "is a fracture region too (same mesh)"),
     **SOLVER_PARAMETERS,
 }
 
@@ -253,16 +259,18 @@ MEASURED = {
 
 def build_mesh(p: dict):
     """The mesh of ``p["loading"]`` (``studies/_tpb_geometry.py``): regions ``beam``, ``band``,
-    ``support_zone`` (and ``void``, ``indenter`` with the indenter); boundaries ``support_left``,
-    ``support_right`` and ``load`` (indenter top, or the window on the beam top)."""
+    ``support_zone`` (and ``void``, ``indenter`` with the indenter; ``load_zone`` with
+    ``indenter_exclusion`` > 0); boundaries ``support_left``, ``support_right`` and ``load``
+    (indenter top, or the window on the beam top)."""
     return _geometry.build_mesh(p)
 
 
 def check_parameters(p: dict):
-    """Raise StudyError naming the parameter if ``loading``, ``split`` or ``formulation`` is not one
-    of its values, or if the sizes cannot make the mesh."""
+    """Raise StudyError naming the parameter if ``loading``, ``split``, ``formulation`` or
+    ``notch_shape`` is not one of its values, or if the sizes cannot make the mesh."""
     from ngtmc.splits import FORMULATIONS, SPLITS
-    for key, valid in (("loading", _geometry.LOADINGS), ("split", SPLITS), ("formulation", FORMULATIONS)):
+    for key, valid in (("loading", _geometry.LOADINGS), ("split", SPLITS), ("formulation", FORMULATIONS),
+                       ("notch_shape", _geometry.NOTCH_SHAPES)):
         value = p.get(key, PARAMETERS[key][0])
         if value not in valid:
             raise StudyError(f"three_point_bending: {key} = {value!r} is not one of {', '.join(map(repr, valid))}")
@@ -283,7 +291,7 @@ def build_scene(p: dict) -> ngtmc.Scene:
     common = dict(
         mesh=mesh,
         supports=[ngtmc.Support("support_left", x=True, y=True), ngtmc.Support("support_right", y=True)],
-        fracture_regions=["beam", "band"],
+        fracture_regions=["beam", "band"] + ([] if p.get("support_exclusion", True) else ["support_zone"]),
         gamma0=float(p["gamma0"]),
         residual_stiffness=float(p["residual_stiffness"]),
         thickness=float(p["thickness"]),
@@ -291,11 +299,12 @@ def build_scene(p: dict) -> ngtmc.Scene:
         formulation=p.get("formulation", PARAMETERS["formulation"][0]),
         name="three_point_bending",
     )
+    solid = "beam|band|support_zone" + ("|load_zone" if float(p.get("indenter_exclusion", 0.0)) > 0 else "")
     if p.get("loading", "indenter") == "window":
-        return ngtmc.Scene(materials={"beam|band|support_zone": mat},
+        return ngtmc.Scene(materials={solid: mat},
                            load=ngtmc.DisplacementLoad("load", direction="-y", hold_tangential=False), **common)
     return ngtmc.Scene(
-        materials={"beam|band|support_zone|void|indenter": mat},
+        materials={solid + "|void|indenter": mat},
         load=ngtmc.DisplacementLoad("load", direction="-y", hold_tangential=True),
         density={"void": 0.0},
         regulariser=ngtmc.Regulariser("void", length=float(p["reg_length"]), kbar_r=float(p["kbar_r"])),
