@@ -18,6 +18,7 @@ Variants of the beam (issue 15, fidelity; the defaults give the paper's mesh unc
 * ``indenter_exclusion`` = a > 0: a rectangle [L/2 - a, L/2 + a] x [H - a, H] under the load
   (indenter or window), region ``load_zone``, meshed to ``h_band``, where the scene models no
   fracture (like the support zones); cut out of the band and the beam;
+* ``notch_depth`` = 0: no notch (the linear-elastic reference of the unnotched beam);
 * ``support_zone`` = ``support_length``: no zone beyond the support squares (the squares
   ``support_length`` wide stay, named ``support_zone``).
 
@@ -43,6 +44,8 @@ def check_geometry(p: dict):
     if not (sl <= zs < L / 2 and nw / 2 < bw):
         raise ValueError("three_point_bending geometry: need support_length <= support_zone < beam_length/2 and "
                          "notch_width/2 < band_half_width")
+    if not 0 <= float(p["notch_depth"]) < float(p["beam_height"]):
+        raise ValueError("three_point_bending geometry: need 0 <= notch_depth < beam_height")
     a = float(p.get("indenter_exclusion", 0.0))
     if not (0 <= a < min(float(p["beam_height"]) - float(p["notch_depth"]), L / 2 - zs)):
         raise ValueError(f"three_point_bending geometry: need 0 <= indenter_exclusion < beam_height - notch_depth "
@@ -70,7 +73,9 @@ def build_mesh(p: dict):
     xm = L / 2
     beam = Rectangle(L, Hb).Face()
     band = MoveTo(xm - bw, 0).Rectangle(2 * bw, Hb).Face()
-    if p.get("notch_shape", "flat") == "v":
+    if nd <= 0:
+        notch = None
+    elif p.get("notch_shape", "flat") == "v":
         notch = MoveTo(xm - nw / 2, 0).LineTo(xm + nw / 2, 0).LineTo(xm, nd).Close().Face()
     else:
         notch = MoveTo(xm - nw / 2, 0).Rectangle(nw, nd).Face()
@@ -83,11 +88,12 @@ def build_mesh(p: dict):
     if zs > sl:  # else no zone beyond the support squares
         zones = [zone_l - sq_l, zone_r - sq_r] + zones
     ww = float(p["window_width"]) if window else 0.0
+    cut = (lambda f: f - notch) if nd > 0 else (lambda f: f)  # notch_depth = 0: the unnotched beam
     if window:
         mid = MoveTo(xm - ww / 2, 0).Rectangle(ww, Hb).Face()
-        bands = [band - mid, mid - notch]
+        bands = [band - mid, cut(mid)]
     else:
-        bands = [band - notch]
+        bands = [cut(band)]
     loaded = []
     a = float(p.get("indenter_exclusion", 0.0))
     if a > 0:  # no fracture under the load: cut out of the band (and the beam), pieces along the window's ends

@@ -167,6 +167,7 @@ import numpy as np
 import ngtmc
 from ngtmc.study import SOLVER_PARAMETERS, Case, StudyError, simulation_options
 
+from ngtmc.studies import _tpb_elastic as _elastic
 from ngtmc.studies import _tpb_geometry as _geometry
 
 NAME = "three_point_bending"
@@ -424,6 +425,17 @@ def elastic_slope(load, force, lo: float = 0.25, hi: float = 0.60) -> float:
 
     a, b = crossing(lo * y[i]), crossing(hi * y[i])
     return float((hi - lo) * y[i] / (1e3 * (b - a)))
+
+
+def linear_elastic_slope(p: dict, order: int = 2) -> dict:
+    """Linear-elastic reference of the unbroken beam (small strain, plane strain, NGSolve), loaded
+    on the window (u_y imposed, tangential free) whatever ``p["loading"]``, with the notch of
+    ``p`` (none if ``notch_depth`` = 0), on the mesh of ``p``'s sizes with displacement ``order``.
+    Returns ``slope`` (N/mm per micrometre of window displacement; compare :func:`elastic_slope`),
+    ``slope_mid_height`` (per micrometre of mid-height deflection at mid-span relative to the
+    supports; compare the beam theory of ``_tpb_elastic.beam_theory_slope``), ``ndof``,
+    ``elements``. See ``studies/_tpb_elastic.py``."""
+    return _elastic.linear_elastic_stiffness(p, order=order)
 
 
 def post_results(p: dict, history, results: dict) -> dict:
