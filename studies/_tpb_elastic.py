@@ -1,4 +1,5 @@
-"""Linear-elastic reference of the three-point-bending beam (``studies/three_point_bending.py``).
+"""Linear-elastic reference of the three-point-bending beam (``studies/three_point_bending.py``),
+and the measure of the rising branch (:func:`elastic_slope`) it is compared with.
 
 Small strain, plane strain, isotropic (E, nu of the study), the unbroken beam: no phase field,
 no void, no indenter. The beam of the study's mesh with ``loading = "window"`` (the notch as
@@ -10,6 +11,8 @@ the indenter variant's, less the indenter's and the void's compliance.
 The file name starts with an underscore: it is a helper, not a study.
 """
 from __future__ import annotations
+
+import numpy as np
 
 
 def linear_elastic_stiffness(p: dict, order: int = 2) -> dict:
@@ -77,3 +80,21 @@ def beam_theory_slope(p: dict, shear_coefficient: float = 5.0 / 6.0) -> float:
     Ep, G = E / (1 - nu ** 2), E / (2 * (1 + nu))
     compliance = S ** 3 / (48 * Ep * H ** 3 / 12) + S / (4 * shear_coefficient * G * H)
     return 1.0 / compliance / 1e3
+
+
+def elastic_slope(load, force, lo: float = 0.25, hi: float = 0.60) -> float:
+    """Secant slope of the rising branch, N/mm per micrometre of load, between the first points
+    where the force reaches ``lo`` and ``hi`` times the peak (loads linearly interpolated; so the
+    coarse digitised references are measured the same way). With the indenter both lie after
+    contact: the void carries at most 1.3 % of the peak. NaN if the curve has no rising branch."""
+    x, y = np.asarray(load, dtype=float), np.asarray(force, dtype=float)
+    i = int(np.nanargmax(y))
+
+    def crossing(level):
+        j = int(np.argmax(y[: i + 1] >= level))
+        if j == 0:
+            return float("nan")
+        return x[j - 1] + (level - y[j - 1]) * (x[j] - x[j - 1]) / (y[j] - y[j - 1])
+
+    a, b = crossing(lo * y[i]), crossing(hi * y[i])
+    return float((hi - lo) * y[i] / (1e3 * (b - a)))

@@ -169,6 +169,8 @@ from ngtmc.study import SOLVER_PARAMETERS, Case, StudyError, simulation_options
 
 from ngtmc.studies import _tpb_elastic as _elastic
 from ngtmc.studies import _tpb_geometry as _geometry
+from ngtmc.studies._tpb_elastic import elastic_slope  # noqa: F401 (part of the study's interface)
+from ngtmc.studies._tpb_references import AMBATI_SOURCE, MIEHE_SOURCE, reference_curves  # noqa: F401
 
 NAME = "three_point_bending"
 TITLE = "Three-point bending with an indenter"
@@ -213,8 +215,9 @@ PARAMETERS = {
     "split": ("vol-dev-J", "-", "tension/compression split (ngtmc.splits.SPLITS): 'vol-dev-J' (paper), "
                                 "'vol-dev-small', 'vol-dev-log', 'spectral', 'none'"),
     "formulation": ("hybrid", "-", "where the split acts: 'hybrid' (history only; paper) or 'anisotropic'"),
-    "notch_shape": ("flat", "-", "'flat' (notch_width wide, flat tip), 'v' (V-notch of the same depth and mouth "
-                                 "width, sharp tip) or 'slit' (h_band wide, the narrowest the mesh resolves, flat tip)"),
+    "notch_shape": ("flat", "-", "'flat' (notch_width wide, flat tip), 'v' (V-notch of the same depth and "
+                                 "mouth width, sharp tip) or 'slit' (h_band wide, the narrowest the mesh "
+                                 "resolves, flat tip)"),
     "indenter_exclusion": (0.0, "mm", "half width and depth of a rectangle of the beam top under the load (region "
                                       "'load_zone', either loading) where fracture is excluded; 0: none"),
     "support_exclusion": (True, "-", "fracture excluded in the support zones (True); False: the support_zone region "
@@ -347,30 +350,6 @@ def cases(p: dict) -> list[Case]:
                       final_load=stop)]
 
 
-def _data_path(name):
-    from importlib.resources import files
-    return files("ngtmc.data").joinpath(name)
-
-
-AMBATI_SOURCE = ("Ambati, Gerasimov & De Lorenzis (2015), Comput Mech 55:383, Fig. 22 (hybrid model), hand-digitised; "
-                 "file from github tiantian0347/fractureX, docs/benchmarks/figures/loaddisp/"
-                 "ambati_fig22_model5_tpb_digitized.csv @ ed1a6f68")
-MIEHE_SOURCE = ("Three-point bending curve labelled 'Miehe' (Miehe et al. 2010), digitised; file from github "
-                "CastillonMiguel/phasefieldx, examples/PhaseFieldFracture/reference_solutions/miehe_three_point.csv "
-                "@ ed64055c (MIT licence)")
-
-
-def reference_curves(gap: float) -> dict:
-    """Ambati and Miehe curves shifted by the gap, in mm and N/mm: {name: (x, y)}."""
-    import pandas as pd
-    amb = pd.read_csv(_data_path("tpb_ambati2015_fig22_fractureX_digitized_kN_mm.csv"))
-    mie = np.loadtxt(_data_path("tpb_miehe_phasefieldx_digitized_kN_mm.txt"))
-    return {
-        "ambati": (amb["u_mm"].to_numpy() + gap, 1000.0 * amb["force_kN"].to_numpy()),
-        "miehe": (mie[:, 0] + gap, 1000.0 * mie[:, 1]),
-    }
-
-
 def references(p: dict) -> list[dict]:
     gap = load_shift(p)
     cur = reference_curves(gap)
@@ -407,24 +386,6 @@ EXPECTED = {
     "peak_load": {"case": "main", "quantity": "peak_load", "value": 0.096, "unit": "mm", "rel": 0.10,
                   "source": "Ambati et al. 2015, Fig. 22 (0.046 mm) + the 0.05 mm gap"},
 }
-
-
-def elastic_slope(load, force, lo: float = 0.25, hi: float = 0.60) -> float:
-    """Secant slope of the rising branch, N/mm per micrometre of load, between the first points
-    where the force reaches ``lo`` and ``hi`` times the peak (loads linearly interpolated; so the
-    coarse digitised references are measured the same way). With the indenter both lie after
-    contact: the void carries at most 1.3 % of the peak. NaN if the curve has no rising branch."""
-    x, y = np.asarray(load, dtype=float), np.asarray(force, dtype=float)
-    i = int(np.nanargmax(y))
-
-    def crossing(level):
-        j = int(np.argmax(y[: i + 1] >= level))
-        if j == 0:
-            return float("nan")
-        return x[j - 1] + (level - y[j - 1]) * (x[j] - x[j - 1]) / (y[j] - y[j - 1])
-
-    a, b = crossing(lo * y[i]), crossing(hi * y[i])
-    return float((hi - lo) * y[i] / (1e3 * (b - a)))
 
 
 def linear_elastic_slope(p: dict, order: int = 2) -> dict:

@@ -127,9 +127,10 @@ def test_linear_elastic_reference_against_beam_theory():
 
 
 def test_linear_elastic_reference_of_the_study_beam():
-    """The study's 8 x 2 mm beam (S/H = 4): order 2 and 3 agree to 1 % on the quick mesh; the notch
+    """The study's 8 x 2 mm beam (S/H = 4): order 2 and 3 agree to 1 % on the quick mesh (measured
+    0.6 %; the reference is compared with slopes 2-10 % apart); the notch
     and the window's local indentation make the beam softer. Beam theory is not a check here: at
-    S/H = 4 it is 5-6 % softer than the 2D solution (measured: 1.216 against 1.287 N/mm per
+    S/H = 4 it is 5.7-6.0 % softer than the 2D solution (measured: 1.216 against 1.286-1.290 N/mm per
     micrometre; a first version of this test with a 5 % tolerance failed), see docs/fidelity.md."""
     _, p = study_parameters(tpb, "quick", {"notch_depth": 0.0})
     assert elastic.beam_theory_slope(p) == pytest.approx(1.216, abs=1e-3)  # N/mm per micrometre, by hand
