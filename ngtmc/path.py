@@ -26,12 +26,14 @@ applied: it bounds the dissipation per step, which the path now does itself):
 3. A dissipation step that moves the load by more than du_max is solved again with the
    dissipation scaled down in proportion (0.9 du_max / |load change|); if the load still moves
    too far, the crack has stopped and the step is a displacement step of du.
-4. After a dissipation step the next step is a dissipation step too (no displacement attempt:
+4. On a new segment of the schedule (after a turning point) the rule starts afresh: rate 0,
+   displacement steps first (an unloading segment does not dissipate).
+5. After a dissipation step the next step is a dissipation step too (no displacement attempt:
    in stable growth after a crack run, a fixed-load Newton creeps where the dissipation-controlled
    one converges in a few iterations: the crack advances element by element, each advance a small
    snap-back; at the paper's resolution the fixed-load Newton also stalled before the peak),
    unless the step had to be scaled below a quarter of dD (slow growth).
-5. Every step starts from the secant predictor x_n + r (x_n - x_{n-1}) through the last two
+6. Every step starts from the secant predictor x_n + r (x_n - x_{n-1}) through the last two
    accepted states (alpha kept in [alpha_n, 1]; r the ratio of the load or dissipation
    increments, at most 2), or, without it, from the u solve with alpha_{n-1}.
 
@@ -105,6 +107,8 @@ class DissipationPath:
         self.delta_d_prev = 0.0
         #: growth factor of dD (GROWTH_START .. GROWTH_MAX, module docstring)
         self.growth = GROWTH_START
+        #: (t_start, t_end) of the schedule segment of the last attempt
+        self.segment = None
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
 
     @property
@@ -133,6 +137,14 @@ class DissipationPath:
         sim, s = self.sim, self.sim.solver
         sch = sim.schedule
         load_n = sch.load(sim.t)
+        seg = list(self._segment())
+        if self.segment is not None and seg != self.segment:
+            # a new segment of the schedule (a turning point): the rate and the hysteresis of the
+            # last segment say nothing about this one (unloading does not dissipate)
+            self.dissipating = False
+            self.rate = 0.0
+            self.growth = GROWTH_START
+        self.segment = seg
         dD = self.target
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
                 "projected": 0}
@@ -276,7 +288,7 @@ class DissipationPath:
 
     def get_state(self) -> dict:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
-        return {"growth": self.growth, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+        return {"growth": self.growth, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
                 "delta_d_prev": self.delta_d_prev}
 
@@ -309,3 +321,4 @@ class DissipationPath:
         self.dissipation_steps = int(st["dissipation_steps"])
         self.dissipating = bool(st.get("dissipating", False))
         self.growth = float(st.get("growth", GROWTH_START))
+        self.segment = st.get("segment")
