@@ -131,3 +131,24 @@ def test_displacement_steps_of_path_following_are_bounded_by_the_curve_resolutio
         ngtmc.Simulation(_plate(), 0.012, control, scheme="path-following", coupled={"du_max": 1e-9})
     with pytest.raises(ValueError, match="path following only"):
         ngtmc.Simulation(_plate(), 0.012, control, scheme="monolithic", coupled={"du_max": 5e-4})
+
+
+def test_turning_point_starts_the_rule_afresh():
+    """Load to 0.007 mm (damage grows under dissipation control near the peak), unload to
+    0.005 mm and reload to 0.012 mm: the unloading segment dissipates nothing and takes
+    displacement steps (the rule's rate and hysteresis of the loading segment are dropped at the
+    turning point), and the run completes through the crack run on reloading."""
+    sched = ngtmc.Schedule([0.0, 0.007, 0.005, 0.012])
+    sim = ngtmc.Simulation(_plate(), sched, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7),
+                           scheme="path-following")
+    h = sim.run().history
+    load = h["load"].to_numpy()
+    i_turn = int(np.argmax(load >= 0.007 - 1e-12))
+    j_back = i_turn + int(np.argmax(load[i_turn:] <= 0.005 + 1e-12))
+    unload = h.iloc[i_turn:j_back + 1]
+    print(f"\ncycle: {len(h) - 1} steps, unloading {len(unload) - 1} steps, dissipated while unloading "
+          f"{unload.dissipated_energy.iloc[-1] - unload.dissipated_energy.iloc[0]:.3e} N mm")
+    assert load[-1] == pytest.approx(0.012)
+    assert np.all(np.diff(unload["load"]) < 0)
+    assert unload.dissipated_energy.iloc[-1] - unload.dissipated_energy.iloc[0] <= 1e-9 * h.dissipated_energy.max()
+    assert h["max_alpha"].iloc[-1] > 0.99
