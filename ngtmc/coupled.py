@@ -102,12 +102,18 @@ class CoupledNewton:
         self.gmres_rtol = float(gmres_rtol)
         self.gmres_maxsteps = int(gmres_maxsteps)
         self._inv_u = None
-        #: solves accepted at the residual floor (FLOOR_RTOL), and their largest relative residual
+        #: relative residual accepted where the Newton direction no longer helps (None: never;
+        #: the adjoint's recording sets None, since a gradient is only as exact as its states)
+        self.floor_rtol = FLOOR_RTOL
+        #: solves accepted at the residual floor (floor_rtol), and their largest relative residual
         self.floor_accepts = 0
         #: Newton iterations that took a Levenberg step (LEVENBERG_SHIFTS)
         self.levenberg_steps = 0
-        #: displacement relaxations at fixed alpha (``solve`` docstring)
+        #: displacement relaxations at fixed alpha (``solve`` docstring), and whether they are
+        #: allowed (the adjoint's recording switches them off: a relaxation may reach another of
+        #: two nearby equilibria, so the replays of a finite-difference check need not follow it)
         self.relaxations = 0
+        self.relax = True
         self.floor_worst = 0.0
         self.gmres_iterations = []  # GMRES iterations of each block-GMRES solve (diagnostics)
         self._wf_form = None
@@ -299,7 +305,7 @@ class CoupledNewton:
             energy (so it leaves an unstable equilibrium of a squeezed void, where the residual
             merit of the coupled iteration cannot tell a saddle from a minimum); the coupled
             iteration then goes on from there. True if it converged."""
-            if relaxed["done"] or lifted:
+            if relaxed["done"] or lifted or not self.relax:
                 return False
             relaxed["done"] = True
             self._scatter()
@@ -315,8 +321,9 @@ class CoupledNewton:
             """The Newton direction no longer reduces the residual (line search failed, or the
             iteration stalled): accept the iterate if both residuals meet FLOOR_RTOL relative to
             their scales (module docstring)."""
-            if lifted or not self._converged(res_u, res_a, g, reac, r_ref, FLOOR_RTOL,
-                                             FLOOR_RTOL / self.alpha_tol * tol_a, scale_g if path else None):
+            fr = self.floor_rtol
+            if lifted or not fr or not self._converged(res_u, res_a, g, reac, r_ref, fr, fr / self.alpha_tol * tol_a,
+                                                       scale_g if path else None):
                 return None
             self.floor_accepts += 1
             self.floor_worst = max(self.floor_worst, res_u / max(reac, r_ref))

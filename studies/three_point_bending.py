@@ -111,8 +111,14 @@ staggered peak to 0.06 %. The crack run takes 17 steps, the load falling back fr
 0.0914 mm along the snap-back. At the paper's resolution the same scheme gives the first
 converged peak, 36.45 N/mm at 0.0941 mm (-13.2 % from Ambati, 3.2 % below the lagged single-pass
 peak of the same mesh); that run was stopped in its crack run (256 steps, 1034 Newton
-iterations, 2234 s on a shared machine, at 21 N/mm, its dissipation steps being cut back). The default stays single-pass because the adjoint
-differentiates that scheme only; ``docs/performance.md`` has the comparison.
+iterations, 2234 s on a shared machine, at 21 N/mm, its dissipation steps being cut back).
+2026-11-25: the stall is a near-singular mode of the squeezed void (a void vertex of the layer
+under the indenter, which the Hessian regulariser does not resist); with the coupled Newton's
+fallbacks and displacement steps bounded by 1/50 of the load path, the quick curve takes 85
+steps and 529 iterations (peak 37.429 N/mm), and the paper curve was completed once, with one
+manual reset of the step scale (168 steps, 1261 iterations, 1881 s, peak 36.41 N/mm at
+0.0942 mm); not yet unattended. The default stays single-pass until the paper-resolution run of
+path following completes unattended; ``docs/performance.md`` has the comparison.
 
 Fidelity: variants of one set-up (issue 15; ``docs/fidelity.md`` has the details)
 ---------------------------------------------------------------------------------
