@@ -36,6 +36,7 @@ import ngsolve as ngs
 
 from . import fracture
 from .materials import deformation_gradient
+from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
 from .solver import NewtonResult
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
@@ -43,10 +44,6 @@ __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 import os as _os
 _DEBUG = bool(_os.environ.get("NGTMC_DEBUG_COUPLED"))
 
-#: Linear solvers of the coupled tangent: "block-gmres" (GMRES preconditioned by the block lower
-#: triangle, with sparse Cholesky factors of the symmetric u-u and alpha-alpha blocks; the u-u
-#: factor reuses its symbolic step), "umfpack" or "pardiso" (direct, whole matrix).
-LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
 
 
 #: A solve stops as stalled when its merit function fell less than STALL_FACTOR over the last
@@ -94,14 +91,7 @@ class CoupledNewton:
         if solver._tractions:
             raise ValueError("the monolithic scheme does not handle Traction loads (force control); use "
                              "scheme='single-pass' or 'staggered', or a displacement load")
-        if linear_solver not in LINEAR_SOLVERS:
-            raise ValueError(f"linear_solver = {linear_solver!r} is not one of {', '.join(map(repr, LINEAR_SOLVERS))} "
-                             "(the coupled tangent is not symmetric: no 'sparsecholesky' on the whole matrix)")
-        if not 0.0 < gmres_rtol < 1.0:
-            raise ValueError(f"gmres_rtol = {gmres_rtol!r} must be in (0, 1)")
-        self.gmres_rtol = float(gmres_rtol)
-        self.gmres_maxsteps = int(gmres_maxsteps)
-        self._inv_u = None
+        CoupledLinearSolver.check(linear_solver, gmres_rtol)  # before the (costly) form
         #: relative residual accepted where the Newton direction no longer helps (None: never;
         #: the adjoint's recording sets None, since a gradient is only as exact as its states)
         self.floor_rtol = FLOOR_RTOL
@@ -115,7 +105,6 @@ class CoupledNewton:
         self.relaxations = 0
         self.relax = True
         self.floor_worst = 0.0
-        self.gmres_iterations = []  # GMRES iterations of each block-GMRES solve (diagnostics)
         self._wf_form = None
         self.load_solved = None
         self.s = s = solver
@@ -128,6 +117,8 @@ class CoupledNewton:
         self._free_base = np.array(list(X.FreeDofs()), dtype=bool)
         self._free_base[:self.nu] = s._free_np  # vertex conditions live in the solver's mask
         self.form = self._build_form()
+        #: factorizations of the assembled tangent (:mod:`ngtmc.coupled_linear`)
+        self.lin = CoupledLinearSolver(self.form, self.nu, linear_solver, gmres_rtol, gmres_maxsteps)
         self._r = self.x.vec.CreateVector()
         self._dx = self.x.vec.CreateVector()
         self._w = self.x.vec.CreateVector()
@@ -402,7 +393,7 @@ class CoupledNewton:
             g = constraint(xN)
             reac = float(np.linalg.norm(rN[:nu][dir_u]))
             if _DEBUG:
-                print(f"    gmres {self.gmres_iterations[-2:]}", flush=True)
+                print(f"    gmres {self.lin.gmres_iterations[-2:]}", flush=True)
                 print(f"    coupled it {it} lam {lam:.8g} res_u {res_u:.3e} (ref {max(reac, r_ref):.3e}) res_a {res_a:.3e} "
                       f"(tol {tol_a:.3e}) g {g:.3e} held {int(np.sum(held == -1))}/{int(np.sum(held == 1))}", flush=True)
             if not lifted:
@@ -438,7 +429,7 @@ class CoupledNewton:
             # complementarity scale from the tangent's own diagonal: c R_alpha is then the Jacobi
             # estimate of the dof's Newton step (with c from the (Gc/l0) mass only, the notch tip,
             # where 2 H >> Gc/l0, was put on alpha = 1 and released again, step after step)
-            c = self._ncp_scale = self._diagonal_scale()
+            c = self._ncp_scale = self.lin.diagonal_scale()
             res_u, res_a, held = split(xN, rN)
             merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2 + ((g / scale_g) ** 2 if path else 0.0)
             free = self._free_base.copy()
@@ -449,7 +440,7 @@ class CoupledNewton:
             wN[nu:] = np.where(held == -1, a_low - a_cur, np.where(held == 1, a_up - a_cur, 0.0))
             fixed_step = wN.copy()
             t0 = time.perf_counter()
-            lin = self._factorize(free)
+            lin = self.lin.factorize(free)
             t1 = time.perf_counter()
             d = direction(lin, free, fixed_step, a_cur, g)
             t2 = time.perf_counter()
@@ -469,7 +460,7 @@ class CoupledNewton:
                 kept = (xN.copy(), tmp.FV().NumPy().copy(), lam, merit) if accepted else None
                 for mu in LEVENBERG_SHIFTS:
                     t0 = time.perf_counter()
-                    lin = self._shifted(free, mu)
+                    lin = self.lin.shifted(free, mu)
                     t1 = time.perf_counter()
                     d = direction(lin, free, fixed_step, a_cur, g)
                     t2 = time.perf_counter()
@@ -518,138 +509,8 @@ class CoupledNewton:
         return (res_u <= rtol * max(reac, r_ref) + s.newton.atol and res_a <= tol_a
                 and (scale_g is None or abs(g) <= 1e-6 * scale_g))
 
-    def _shifted(self, free: np.ndarray, mu: float):
-        """UMFPACK factorization of the tangent with its diagonal on the ``free`` dofs scaled by
-        (1 + mu) (Levenberg); the assembled matrix is restored. Returns solve(rhs, out)."""
-        A = self.form.mat
-        vals = A.AsVector().FV().NumPy()
-        if getattr(self, "_diag_pos_n", None) != vals.size:
-            _, cols, rowptr = A.CSR()
-            cols = np.asarray(cols).astype(np.int64)
-            rowptr = np.asarray(rowptr).astype(np.int64)
-            rows = np.repeat(np.arange(rowptr.size - 1), np.diff(rowptr))
-            on = cols == rows
-            self._diag_pos = np.nonzero(on)[0]
-            self._diag_row = rows[on]
-            self._diag_pos_n = vals.size
-        pos, row = self._diag_pos, self._diag_row
-        keep = vals[pos].copy()
-        vals[pos] = keep + np.where(free[row], mu * np.abs(keep), 0.0)
-        try:
-            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
-        finally:
-            vals[pos] = keep
 
-        def solve(rhs, out):
-            out.data = inv * rhs
-        return solve
-
-    def _diagonal_scale(self) -> np.ndarray:
-        """1 / diagonal of the assembled tangent's alpha-alpha block (per unit of R_alpha)."""
-        import scipy.sparse as sp
-        A = self.form.mat
-        d = sp.csr_matrix(A.CSR(), shape=(A.height, A.width)).diagonal()[self.nu:]
-        d = np.where(d > 0, d, np.nan)
-        floor = 1e-12 * np.nanmax(d) if np.any(np.isfinite(d)) else 1.0
-        return 1.0 / np.where(np.isfinite(d), np.maximum(d, floor), floor)
-
-    def _factorize(self, free: np.ndarray):
-        """Factorize the assembled tangent on the ``free`` dofs; returns solve(rhs, out), out = A^-1
-        rhs on the free dofs (any number of right-hand sides with one factorization)."""
-        if self.linear_solver == "block-gmres":
-            return self._block_solver(free)
-        inv = self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
-
-        def solve(rhs, out):
-            out.data = inv * rhs
-        return solve
-
-    def _block_solver(self, free: np.ndarray):
-        """GMRES with the block lower-triangular preconditioner [K_uu 0; K_au K_aa], with sparse
-        Cholesky factors of the symmetric u-u and alpha-alpha blocks (the u-u factor reuses its
-        symbolic step). GMRES stops when the preconditioned residual fell by ``gmres_rtol``
-        (relative: ngsolve's ``GMRes(tol=)`` is an absolute tolerance, which left the Newton
-        corrections of a nearly converged step inexact, see tests/test_traps.py). Falls back to
-        UMFPACK when GMRES does not converge in ``gmres_maxsteps``."""
-        from ngsolve.krylovspace import GMResSolver
-        A = self.form.mat
-        nu = self.nu
-        if self._inv_u is None:
-            fu = free.copy()
-            fu[nu:] = False
-            self._inv_u = A.Inverse(ngs.BitArray(fu.tolist()), inverse="sparsecholesky")
-        else:
-            self._inv_u.Update()
-        fa = free.copy()
-        fa[:nu] = False
-        inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
-        op = _Masked(A, free)
-        pre = _BlockLower(A, self._inv_u, inv_a)
-        direct = []
-
-        def solve(rhs, out):
-            rhsN = rhs.FV().NumPy()
-            rhsN[~free] = 0.0
-            if direct:
-                out.data = direct[0] * rhs
-                return
-            gm = GMResSolver(mat=op, pre=pre, tol=self.gmres_rtol, atol=1e-300, maxiter=self.gmres_maxsteps,
-                             printrates=False)
-            sol = gm.Solve(rhs=rhs)
-            self.gmres_iterations.append(gm.iterations)
-            if gm.iterations >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy())):
-                direct.append(A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack"))
-                sol.data = direct[0] * rhs
-            out.data = sol
-        return solve
-
-
-class _SquareOperator(ngs.BaseMatrix):
-    """An operator with the shape and vectors of the square matrix A."""
-
-    def __init__(self, A):
-        super().__init__()
-        self.A = A
-
-    def Height(self):
-        return self.A.height
-
-    def Width(self):
-        return self.A.width
-
-    def CreateColVector(self):
-        return self.A.CreateColVector()
-
-    def CreateRowVector(self):
-        return self.A.CreateRowVector()
-
-
-class _Masked(_SquareOperator):
-    """The matrix restricted to the free dofs, identity on the others."""
-
-    def __init__(self, A, free):
-        super().__init__(A)
-        self.free = free
-        self.t = A.CreateColVector()
-
-    def Mult(self, x, y):
-        xN = x.FV().NumPy()
-        self.t.FV().NumPy()[:] = np.where(self.free, xN, 0.0)
-        y.data = self.A * self.t
-        yN = y.FV().NumPy()
-        yN[:] = np.where(self.free, yN, xN)
-
-
-class _BlockLower(_SquareOperator):
-    """Block Gauss-Seidel preconditioner: z_u = K_uu^-1 r_u, z_a = K_aa^-1 (r_a - K_au z_u)."""
-
-    def __init__(self, A, inv_u, inv_a):
-        super().__init__(A)
-        self.inv_u, self.inv_a = inv_u, inv_a
-        self.z = A.CreateColVector()
-        self.t = A.CreateColVector()
-
-    def Mult(self, r, z):
-        self.z.data = self.inv_u * r
-        self.t.data = r - self.A * self.z
-        z.data = self.z + self.inv_a * self.t
+    @property
+    def gmres_iterations(self) -> list:
+        """GMRES iterations of each block-GMRES solve (diagnostics)."""
+        return self.lin.gmres_iterations

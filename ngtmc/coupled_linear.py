@@ -1,0 +1,183 @@
+"""Linear solves of the coupled (u, alpha) tangent of :class:`ngtmc.coupled.CoupledNewton`.
+
+One object per coupled solver holds the factorizations of its assembled tangent (the form's
+``mat``): ``factorize(free)`` (block-GMRES with block Cholesky factors, or a direct solver on the
+whole non-symmetric matrix), ``shifted(free, mu)`` (the Levenberg copy, UMFPACK) and
+``diagonal_scale()`` (the complementarity scale of the alpha bounds). Each factorization returns
+``solve(rhs, out)``, out = A^-1 rhs on the free dofs, for any number of right-hand sides.
+
+Units: those of the tangent (N/mm for u-u entries, N mm for alpha-alpha, per thickness in 2D).
+"""
+from __future__ import annotations
+
+import numpy as np
+import ngsolve as ngs
+
+__all__ = ["CoupledLinearSolver", "LINEAR_SOLVERS"]
+
+#: Linear solvers of the coupled tangent: "block-gmres" (GMRES preconditioned by the block lower
+#: triangle, with sparse Cholesky factors of the symmetric u-u and alpha-alpha blocks; the u-u
+#: factor reuses its symbolic step), "umfpack" or "pardiso" (direct, whole matrix).
+LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
+
+
+class CoupledLinearSolver:
+    """Factorizations of the assembled coupled tangent ``form.mat`` (u dofs first, ``nu`` of
+    them). ``linear_solver``: one of LINEAR_SOLVERS; ``gmres_rtol``, ``gmres_maxsteps``: of
+    block-GMRES. :attr:`gmres_iterations` lists the GMRES iterations of each solve."""
+
+    @staticmethod
+    def check(linear_solver: str, gmres_rtol: float):
+        """Raise ValueError for an unknown ``linear_solver`` or a ``gmres_rtol`` outside (0, 1)."""
+        if linear_solver not in LINEAR_SOLVERS:
+            raise ValueError(f"linear_solver = {linear_solver!r} is not one of {', '.join(map(repr, LINEAR_SOLVERS))} "
+                             "(the coupled tangent is not symmetric: no 'sparsecholesky' on the whole matrix)")
+        if not 0.0 < gmres_rtol < 1.0:
+            raise ValueError(f"gmres_rtol = {gmres_rtol!r} must be in (0, 1)")
+
+    def __init__(self, form, nu: int, linear_solver: str = "block-gmres", gmres_rtol: float = 1e-8,
+                 gmres_maxsteps: int = 100):
+        self.check(linear_solver, gmres_rtol)
+        self.form = form
+        self.nu = int(nu)
+        self.linear_solver = linear_solver
+        self.gmres_rtol = float(gmres_rtol)
+        self.gmres_maxsteps = int(gmres_maxsteps)
+        self.gmres_iterations: list[int] = []
+        self._inv_u = None
+
+    def shifted(self, free: np.ndarray, mu: float):
+        """UMFPACK factorization of the tangent with its diagonal on the ``free`` dofs scaled by
+        (1 + mu) (Levenberg); the assembled matrix is restored. Returns solve(rhs, out)."""
+        A = self.form.mat
+        vals = A.AsVector().FV().NumPy()
+        if getattr(self, "_diag_pos_n", None) != vals.size:
+            _, cols, rowptr = A.CSR()
+            cols = np.asarray(cols).astype(np.int64)
+            rowptr = np.asarray(rowptr).astype(np.int64)
+            rows = np.repeat(np.arange(rowptr.size - 1), np.diff(rowptr))
+            on = cols == rows
+            self._diag_pos = np.nonzero(on)[0]
+            self._diag_row = rows[on]
+            self._diag_pos_n = vals.size
+        pos, row = self._diag_pos, self._diag_row
+        keep = vals[pos].copy()
+        vals[pos] = keep + np.where(free[row], mu * np.abs(keep), 0.0)
+        try:
+            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
+        finally:
+            vals[pos] = keep
+
+        def solve(rhs, out):
+            out.data = inv * rhs
+        return solve
+
+    def diagonal_scale(self) -> np.ndarray:
+        """1 / diagonal of the assembled tangent's alpha-alpha block (per unit of R_alpha)."""
+        import scipy.sparse as sp
+        A = self.form.mat
+        d = sp.csr_matrix(A.CSR(), shape=(A.height, A.width)).diagonal()[self.nu:]
+        d = np.where(d > 0, d, np.nan)
+        floor = 1e-12 * np.nanmax(d) if np.any(np.isfinite(d)) else 1.0
+        return 1.0 / np.where(np.isfinite(d), np.maximum(d, floor), floor)
+
+    def factorize(self, free: np.ndarray):
+        """Factorize the assembled tangent on the ``free`` dofs; returns solve(rhs, out), out = A^-1
+        rhs on the free dofs (any number of right-hand sides with one factorization)."""
+        if self.linear_solver == "block-gmres":
+            return self._block_solver(free)
+        inv = self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
+
+        def solve(rhs, out):
+            out.data = inv * rhs
+        return solve
+
+    def _block_solver(self, free: np.ndarray):
+        """GMRES with the block lower-triangular preconditioner [K_uu 0; K_au K_aa], with sparse
+        Cholesky factors of the symmetric u-u and alpha-alpha blocks (the u-u factor reuses its
+        symbolic step). GMRES stops when the preconditioned residual fell by ``gmres_rtol``
+        (relative: ngsolve's ``GMRes(tol=)`` is an absolute tolerance, which left the Newton
+        corrections of a nearly converged step inexact, see tests/test_traps.py). Falls back to
+        UMFPACK when GMRES does not converge in ``gmres_maxsteps``."""
+        from ngsolve.krylovspace import GMResSolver
+        A = self.form.mat
+        nu = self.nu
+        if self._inv_u is None:
+            fu = free.copy()
+            fu[nu:] = False
+            self._inv_u = A.Inverse(ngs.BitArray(fu.tolist()), inverse="sparsecholesky")
+        else:
+            self._inv_u.Update()
+        fa = free.copy()
+        fa[:nu] = False
+        inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
+        op = _Masked(A, free)
+        pre = _BlockLower(A, self._inv_u, inv_a)
+        direct = []
+
+        def solve(rhs, out):
+            rhsN = rhs.FV().NumPy()
+            rhsN[~free] = 0.0
+            if direct:
+                out.data = direct[0] * rhs
+                return
+            gm = GMResSolver(mat=op, pre=pre, tol=self.gmres_rtol, atol=1e-300, maxiter=self.gmres_maxsteps,
+                             printrates=False)
+            sol = gm.Solve(rhs=rhs)
+            self.gmres_iterations.append(gm.iterations)
+            if gm.iterations >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy())):
+                direct.append(A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack"))
+                sol.data = direct[0] * rhs
+            out.data = sol
+        return solve
+
+
+class _SquareOperator(ngs.BaseMatrix):
+    """An operator with the shape and vectors of the square matrix A."""
+
+    def __init__(self, A):
+        super().__init__()
+        self.A = A
+
+    def Height(self):
+        return self.A.height
+
+    def Width(self):
+        return self.A.width
+
+    def CreateColVector(self):
+        return self.A.CreateColVector()
+
+    def CreateRowVector(self):
+        return self.A.CreateRowVector()
+
+
+class _Masked(_SquareOperator):
+    """The matrix restricted to the free dofs, identity on the others."""
+
+    def __init__(self, A, free):
+        super().__init__(A)
+        self.free = free
+        self.t = A.CreateColVector()
+
+    def Mult(self, x, y):
+        xN = x.FV().NumPy()
+        self.t.FV().NumPy()[:] = np.where(self.free, xN, 0.0)
+        y.data = self.A * self.t
+        yN = y.FV().NumPy()
+        yN[:] = np.where(self.free, yN, xN)
+
+
+class _BlockLower(_SquareOperator):
+    """Block Gauss-Seidel preconditioner: z_u = K_uu^-1 r_u, z_a = K_aa^-1 (r_a - K_au z_u)."""
+
+    def __init__(self, A, inv_u, inv_a):
+        super().__init__(A)
+        self.inv_u, self.inv_a = inv_u, inv_a
+        self.z = A.CreateColVector()
+        self.t = A.CreateColVector()
+
+    def Mult(self, r, z):
+        self.z.data = self.inv_u * r
+        self.t.data = r - self.A * self.z
+        z.data = self.z + self.inv_a * self.t
