@@ -347,6 +347,30 @@ class CoupledNewton:
                 dxN += dlam * bN
             return dxN, dlam
 
+        def timed_direction(factorize, free, fixed_step, a_cur, g):
+            """:func:`direction` from the factorization ``factorize()`` returns, with the time of
+            each part booked (factorization, solve)."""
+            nonlocal solve_time
+            t0 = time.perf_counter()
+            lin = factorize()
+            t1 = time.perf_counter()
+            d = direction(lin, free, fixed_step, a_cur, g)
+            t2 = time.perf_counter()
+            tm["factorization"] += t1 - t0
+            tm["solve"] += t2 - t1
+            solve_time += t2 - t0
+            return d
+
+        def stuck(it, held, message):
+            """Where the iteration stalls or its line search fails: None after a displacement
+            relaxation (the caller iterates on from there), else the iterate accepted at the
+            residual floor, else the failure with ``message``."""
+            if relax_u():
+                merits.clear()
+                return None
+            done = at_floor(it - 1, held)
+            return done if done is not None else failed(it, message)
+
         def search(dxN, dlam, merit0, scale_u, scale_a, lam0):
             """Backtracking from x0 along (dx, dlambda) on the merit function, guard J > 0 and a
             finite residual; returns (accepted, load). The residual of an accepted iterate is
@@ -410,15 +434,12 @@ class CoupledNewton:
             if not lifted and len(merits) > STALL_WINDOW + 2 and merit0 > STALL_FACTOR * merits[-1 - STALL_WINDOW]:
                 # no nearby solution (a crack that wants to run at this load): stop early, the
                 # caller cuts back or changes the control
-                if relax_u():
-                    merits.clear()
+                out = stuck(it, held, f"coupled Newton stalled (merit {merit0:.3g}, {merits[-1 - STALL_WINDOW]:.3g} "
+                                      f"{STALL_WINDOW} iterations before)")
+                if out is None:
                     have_r = False
                     continue
-                done = at_floor(it - 1, held)
-                if done is not None:
-                    return done
-                return failed(it, f"coupled Newton stalled (merit {merit0:.3g}, {merits[-1 - STALL_WINDOW]:.3g} "
-                                  f"{STALL_WINDOW} iterations before)")
+                return out
             # semi-smooth Newton step: held alpha dofs move onto their bound, the others and the
             # free u dofs solve the linearised equations; the Dirichlet remainder is carried
             t0 = time.perf_counter()
@@ -439,14 +460,7 @@ class CoupledNewton:
             wN[:nu] = rem
             wN[nu:] = np.where(held == -1, a_low - a_cur, np.where(held == 1, a_up - a_cur, 0.0))
             fixed_step = wN.copy()
-            t0 = time.perf_counter()
-            lin = self.lin.factorize(free)
-            t1 = time.perf_counter()
-            d = direction(lin, free, fixed_step, a_cur, g)
-            t2 = time.perf_counter()
-            tm["factorization"] += t1 - t0
-            tm["solve"] += t2 - t1
-            solve_time += t2 - t0
+            d = timed_direction(lambda: self.lin.factorize(free), free, fixed_step, a_cur, g)
             if d is None:
                 return failed(it, "dissipation control: the damage does not respond to the load here")
             x0.data = x
@@ -459,14 +473,7 @@ class CoupledNewton:
                 # Levenberg step does better
                 kept = (xN.copy(), tmp.FV().NumPy().copy(), lam, merit) if accepted else None
                 for mu in LEVENBERG_SHIFTS:
-                    t0 = time.perf_counter()
-                    lin = self.lin.shifted(free, mu)
-                    t1 = time.perf_counter()
-                    d = direction(lin, free, fixed_step, a_cur, g)
-                    t2 = time.perf_counter()
-                    tm["factorization"] += t1 - t0
-                    tm["solve"] += t2 - t1
-                    solve_time += t2 - t0
+                    d = timed_direction(lambda: self.lin.shifted(free, mu), free, fixed_step, a_cur, g)
                     if d is None:
                         break
                     ok, lam_l, step_l, merit_l = search(*d, merit0, scale_u, scale_a, lam0)
@@ -486,14 +493,12 @@ class CoupledNewton:
             if not accepted:
                 xN[:] = x0.FV().NumPy()
                 lam = lam0
-                if relax_u():
-                    merits.clear()
+                out = stuck(it, held, "coupled line search failed" if not lifted
+                            else "no admissible step towards the boundary values")
+                if out is None:
                     have_r = False
                     continue
-                done = at_floor(it - 1, held)
-                if done is not None:
-                    return done
-                return failed(it, "coupled line search failed" if not lifted else "no admissible step towards the boundary values")
+                return out
             if path:
                 target = s.dirichlet_target(lam)
             if path and not (lam_lo <= lam <= lam_hi):
