@@ -804,6 +804,24 @@ class _Accumulator:
         return out
 
 
+def history_adjoint(eng, H_prev: np.ndarray, eta: np.ndarray):
+    """Split the adjoint ``eta`` of H_n = max(H_{n-1}, Psi_plus(u_n)) (per history point, at the
+    engine's current u_n) by the active branch: returns (the part passed on to H_{n-1}, the u_n
+    residual term of the part where Psi_plus was taken or None if there is none, the boolean
+    mask of the points where it was taken). The engine's ``hist_forms`` then carry the parameter
+    terms of that part (weight 1)."""
+    eng._irs_tmp.Interpolate(eng.psi_cf)
+    psi = eng._irs_tmp.vec.FV().NumPy()
+    mask = psi > H_prev
+    zH = np.where(mask, eta, 0.0)
+    eta = np.where(mask, 0.0, eta)
+    if not np.any(zH != 0.0):
+        return eta, None, mask
+    eng.z_H.vec.FV().NumPy()[:] = zH
+    eng.hist_u.Assemble()
+    return eta, eng.hist_u.vec.FV().NumPy().copy(), mask
+
+
 def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0")) -> dict:
     """dJ/drho and dJ/dparameters of ``objective`` on the recorded ``path`` by one reverse sweep.
 
@@ -852,15 +870,9 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
         # ---- (3) history H_n = max(H_{n-1}, Psi_plus(u_n))
         if has_a:
             H_prev = st_prev["H"]
-            eng._irs_tmp.Interpolate(eng.psi_cf)
-            psi = eng._irs_tmp.vec.FV().NumPy()
-            mask = psi > H_prev
-            zH = np.where(mask, eta, 0.0)
-            eta = np.where(mask, 0.0, eta)
-            if np.any(zH != 0.0):
-                eng.z_H.vec.FV().NumPy()[:] = zH
-                eng.hist_u.Assemble()
-                ubar += eng.hist_u.vec.FV().NumPy()
+            eta, u_term, _ = history_adjoint(eng, H_prev, eta)
+            if u_term is not None:
+                ubar += u_term
                 add_scalar(eng.hist_forms, 1.0, abar)
         # ---- (2) displacement equilibrium: reaction seeds and the adjoint solve with K_n
         s.a_u.AssembleLinearization(s.u.vec)

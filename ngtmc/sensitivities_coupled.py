@@ -321,15 +321,9 @@ def coupled_gradient(path: CoupledPath, objective, wrt=("rho", "E", "Gc", "l0", 
             acc.add(forms, w * t, abar)
         # ---- history H_n = max(H_{n-1}, Psi_plus(u_n)): eta at the active points goes to u_n
         H_prev = st_prev["H"]
-        eng._irs_tmp.Interpolate(eng.psi_cf)
-        psi = eng._irs_tmp.vec.FV().NumPy()
-        mask = psi > H_prev
-        zH = np.where(mask, eta, 0.0)
-        eta = np.where(mask, 0.0, eta)
-        if np.any(zH != 0.0):
-            eng.z_H.vec.FV().NumPy()[:] = zH
-            eng.hist_u.Assemble()
-            xbar[:nu] += eng.hist_u.vec.FV().NumPy()
+        eta, u_term, mask = _S.history_adjoint(eng, H_prev, eta)
+        if u_term is not None:
+            xbar[:nu] += u_term
             acc.add(eng.hist_forms, 1.0)
         # ---- the coupled step: tangent at (u_n, alpha_n) with the step's H_{n-1}
         s.H.vec.FV().NumPy()[:] = H_prev
