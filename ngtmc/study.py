@@ -26,7 +26,14 @@ from typing import Any, Callable
 import numpy as np
 
 __all__ = ["Case", "StudyError", "STUDIES", "ENTRY_POINT_GROUP", "registered_studies", "list_studies", "load_study", "load_study_file", "normalise_name", "study_parameters",
-           "SOLVER_PARAMETERS", "simulation_options"]
+           "SOLVER_PARAMETERS", "simulation_options", "data_path"]
+
+
+def data_path(name: str):
+    """Path of a reference file shipped in ``ngtmc/data`` (digitised curves, with their sources in
+    the studies that read them)."""
+    from importlib.resources import files
+    return files("ngtmc.data").joinpath(name)
 
 #: Solver settings a study exposes next to its physics (``**SOLVER_PARAMETERS`` in PARAMETERS):
 #: name -> (default, unit, description). They change cost and, for ``scheme``, the time

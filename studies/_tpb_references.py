@@ -6,10 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def _data_path(name):
-    from importlib.resources import files
-    return files("ngtmc.data").joinpath(name)
+from ngtmc.study import data_path
 
 
 AMBATI_SOURCE = ("Ambati, Gerasimov & De Lorenzis (2015), Comput Mech 55:383, Fig. 22 (hybrid model), hand-digitised; "
@@ -23,8 +20,8 @@ MIEHE_SOURCE = ("Three-point bending curve labelled 'Miehe' (Miehe et al. 2010),
 def reference_curves(gap: float) -> dict:
     """Ambati and Miehe curves shifted by the gap, in mm and N/mm: {name: (x, y)}."""
     import pandas as pd
-    amb = pd.read_csv(_data_path("tpb_ambati2015_fig22_fractureX_digitized_kN_mm.csv"))
-    mie = np.loadtxt(_data_path("tpb_miehe_phasefieldx_digitized_kN_mm.txt"))
+    amb = pd.read_csv(data_path("tpb_ambati2015_fig22_fractureX_digitized_kN_mm.csv"))
+    mie = np.loadtxt(data_path("tpb_miehe_phasefieldx_digitized_kN_mm.txt"))
     return {
         "ambati": (amb["u_mm"].to_numpy() + gap, 1000.0 * amb["force_kN"].to_numpy()),
         "miehe": (mie[:, 0] + gap, 1000.0 * mie[:, 1]),

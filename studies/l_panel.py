@@ -188,7 +188,7 @@ import numpy as np
 
 import ngtmc
 from ngtmc.runfiles import peak_index
-from ngtmc.study import SOLVER_PARAMETERS, Case, simulation_options
+from ngtmc.study import SOLVER_PARAMETERS, Case, data_path, simulation_options
 
 NAME = "l_panel"
 TITLE = "L-shaped panel: load, unload, reload through an indenter"
@@ -482,11 +482,6 @@ def cases(p: dict) -> list[Case]:
     return out
 
 
-def _data_path(name):
-    from importlib.resources import files
-    return files("ngtmc.data").joinpath(name)
-
-
 WINKLER_BAND_SOURCE = ("Winkler L-shaped panel experiments, scatter band (Winkler et al. 2004 IJNAMG Fig. 10 and "
                        "Winkler et al. 2001 Fig. 5), digitised; file from github fpled/MYCODE, examples/phasefield/"
                        "dataLshapedPanelWinkler/force_displacement_Win04_fig10_Win01_fig5.csv @ 626a87f0")
@@ -500,8 +495,8 @@ def references(p: dict) -> list[dict]:
     import pandas as pd
     gap = effective_gap(p)
     scale = float(p["thickness"]) / 100.0
-    band = pd.read_csv(_data_path("lshape_winkler_experiment_envelope_kN_mm.csv"))
-    a = pd.read_csv(_data_path("lshape_winkler_experiment_seriesA_N_mm.csv"))
+    band = pd.read_csv(data_path("lshape_winkler_experiment_envelope_kN_mm.csv"))
+    a = pd.read_csv(data_path("lshape_winkler_experiment_seriesA_N_mm.csv"))
     unit = "N" if scale == 1.0 else f"N per {float(p['thickness']):g} mm"
     return [
         {"label": "Winkler experiments, scatter band (shifted by the gap)", "source": WINKLER_BAND_SOURCE,
