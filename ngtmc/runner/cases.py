@@ -35,7 +35,8 @@ class _Run(RunFolder):
         self.resume_from: dict[str, dict] = {}   # case -> checkpoint to continue from (see prepare_resume)
 
     # ------------------------------------------------------------ resume
-    def _adopt_completed(self, case: Case, ck: dict):
+    def adopt(self, case: Case, ck: dict):
+        """Take the rows, results, case metadata and snapshots of ``case`` from its checkpoint ``ck``."""
         self.rows[case.name] = ck["rows"]
         self.results[case.name] = ck["results"]
         self.case_meta[case.name] = ck["case_meta"]
@@ -54,7 +55,7 @@ class _Run(RunFolder):
         for case in self.cases:
             ck = self.load_checkpoint(case)
             if ck is not None and ck["done"]:
-                self._adopt_completed(case, ck)
+                self.adopt(case, ck)
             elif ck is not None:
                 self.resume_from[case.name] = ck
                 # kept in the files until the case goes on, so that no failure before then loses them
@@ -75,7 +76,7 @@ class _Run(RunFolder):
                                    for r in rows.drop(columns="case").to_dict("records")],
                           "results": recorded[case.name], "case_meta": cm,
                           "snaparr": {k: v for k, v in old_snaps.items() if k.startswith(case.name + "__")}}
-                    self._adopt_completed(case, ck)
+                    self.adopt(case, ck)
                     self.save_checkpoint(case, {"rows": ck["rows"]}, None, done=True)
                     self.progress.say(f"case {case.name}: no readable checkpoint; its completed results are "
                                       "taken from history.csv and metadata.json")
@@ -93,14 +94,15 @@ class _Run(RunFolder):
             pass
         return hist, snaps
 
-    def validate(self):
+    def validate(self, cases=None):
         """Check every case still to be computed (scene, schedule, control, options) before any folder
-        is created or any step solved; raise StudyError naming the case and the parameter."""
+        is created or any step solved; raise StudyError naming the case and the parameter.
+        ``cases``: only these (default: all of the run)."""
         import inspect
         from ..simulation import Simulation
         from ..stepping import AdaptiveStepControl, Schedule
         allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
-        for case in self.cases:
+        for case in self.cases if cases is None else cases:
             if case.name in self.results or case.run is not None:
                 continue
             try:
@@ -117,11 +119,15 @@ class _Run(RunFolder):
                 raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
 
     # ------------------------------------------------------------ one case
+    def completed(self, case: Case) -> bool:
+        """The case is complete (computed, or taken over by :meth:`prepare_resume`)."""
+        return (self.results.get(case.name) or {}).get("status") == "completed"
+
     def run_case(self, k: int, case: Case, resume: bool):
         from ..simulation import Simulation, StepFailure
 
         ck = self.resume_from.pop(case.name, None)
-        if case.name in self.results and self.results[case.name].get("status") == "completed":
+        if self.completed(case):
             self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: already complete (checkpoint)")
             return
 
@@ -234,9 +240,16 @@ class _Run(RunFolder):
         self.write_all()
 
     # ------------------------------------------------------------ whole run
-    def run(self, resume: bool, meta: dict | None = None):
+    def run_cases(self, resume: bool):
+        """Compute the cases one after the other in this process (the first failure stops the run)."""
+        for k, case in enumerate(self.cases):
+            self.run_case(k, case, resume)
+
+    def run(self, resume: bool, meta: dict | None = None, run_cases=None):
         """Compute every case not taken over by :meth:`prepare_resume`; ``meta``: the recorded
-        metadata of the run to resume (its creation date and wall time carry over)."""
+        metadata of the run to resume (its creation date and wall time carry over).
+        ``run_cases(resume)`` computes the cases (default :meth:`run_cases`, serially; the cases on a
+        Dask cluster: :mod:`ngtmc.runner.parallel`); the status and files of the run are kept here."""
         if resume and meta:
             if isinstance(meta.get("features"), dict):
                 self.features.update({k: bool(v) for k, v in meta["features"].items()})
@@ -248,8 +261,7 @@ class _Run(RunFolder):
         self.out.mkdir(parents=True, exist_ok=True)
         self.write_metadata()
         try:
-            for k, case in enumerate(self.cases):
-                self.run_case(k, case, resume)
+            (run_cases or self.run_cases)(resume)
         except KeyboardInterrupt:
             self.status = "interrupted"
             self.error = "interrupted by the user (resume with resume=True / --resume)"

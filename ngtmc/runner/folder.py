@@ -110,6 +110,7 @@ class RunFolder:
         self.mesh = None
         self.status = "running"
         self.error = None
+        self.parallel: dict | None = None     # how the cases were spread over a Dask cluster, if they were
         self.t0 = time.perf_counter()
         self.wall_before = 0.0
         self.created = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
@@ -178,6 +179,8 @@ class RunFolder:
             meta["figures"] = figures
         if self.features:
             meta["features"] = dict(self.features)
+        if self.parallel:
+            meta["parallel"] = dict(self.parallel)
         if self.error:
             meta["error"] = self.error
         return meta
