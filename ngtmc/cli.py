@@ -5,6 +5,7 @@
     ngtmc show three-point-bending
     ngtmc run three-point-bending --resolution medium --set k_u=50 --set du_max=1e-3
     ngtmc run three-point-bending --output reports/tpb --resume
+    ngtmc run step-control --workers 2
     ngtmc run path/to/my_study.py --resolution quick
     ngtmc report reports/three_point_bending-quick
     ngtmc report --index runs
@@ -52,7 +53,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--resume", action="store_true", help="continue an interrupted or failed run from its checkpoint")
     r.add_argument("--no-report", action="store_true", help="do not render report.html")
     r.add_argument("--no-vtk", action="store_true", help="do not write the ParaView series")
-    r.add_argument("--threads", type=int, default=2, help="NGSolve threads (default 2)")
+    r.add_argument("--threads", type=int, default=None,
+                   help="NGSolve threads (default 2; per worker with --workers or --scheduler, default 1)")
+    r.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="run the cases in parallel on a local Dask cluster of N worker processes "
+                        "(needs pip install ngtmc[parallel]; docs/parallel.md)")
+    r.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="send the cases to the Dask scheduler at ADDRESS (e.g. tcp://host:8786) instead")
     r.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
 
     sub.add_parser("list", help="list the studies with their resolutions")
@@ -143,7 +150,8 @@ def _cmd_run(args) -> int:
     try:
         out = run_study(args.name, resolution=args.resolution, output=args.output, overrides=overrides,
                         report=False if args.no_report else None, resume=args.resume,
-                        progress=not args.quiet, threads=args.threads, vtk=not args.no_vtk)
+                        progress=not args.quiet, threads="auto" if args.threads is None else args.threads,
+                        vtk=not args.no_vtk, workers=args.workers, scheduler=args.scheduler)
     except StudyError as e:
         print(f"ngtmc: error: {e}", file=sys.stderr)
         return 2

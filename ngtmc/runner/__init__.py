@@ -29,7 +29,8 @@ gets status ``"interrupted"``.
 
 This package: :func:`run_study` and the checks before a run (here); the folder of a run, its
 files, metadata and checkpoints (:mod:`ngtmc.runner.folder`); the case loop and resume
-(:mod:`ngtmc.runner.cases`); a user's own scene (:mod:`ngtmc.runner.user_scene`).
+(:mod:`ngtmc.runner.cases`); the cases on a Dask cluster (:mod:`ngtmc.runner.parallel`, optional);
+a user's own scene (:mod:`ngtmc.runner.user_scene`).
 """
 from __future__ import annotations
 
@@ -83,9 +84,10 @@ def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Pa
 
 def run_study(name: str | ModuleType, resolution: str | None = None, output: str | Path | None = None,
               overrides: dict | None = None, report: bool | None = None, resume: bool = False,
-              progress: bool | Callable = True, *, threads: int | None = 2, checkpoint_every: int = 25,
+              progress: bool | Callable = True, *, threads: int | str | None = "auto", checkpoint_every: int = 25,
               checkpoint_seconds: float = 30.0, vtk: bool = True,
-              callbacks: Sequence[Callable] = ()) -> Path:
+              callbacks: Sequence[Callable] = (), workers: int | None = None,
+              scheduler: str | None = None) -> Path:
     """Run a named study and return the path of its run folder.
 
     Parameters
@@ -110,13 +112,24 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     progress : bool or callable
         True prints a progress line about every 5 s on stderr; a callable receives each history row
         (with its ``case``).
-    threads : int or None
+    threads : int, None or "auto"
         ``ngsolve.SetNumThreads`` (an integer >= 1); the run is inside ``ngsolve.TaskManager()``.
-        None: leave as is.
+        None: leave as is. "auto" (default): 2, or 1 per worker when the cases run on a cluster.
     checkpoint_every, checkpoint_seconds : checkpoint period in accepted steps and seconds.
     vtk : bool
         Write the ParaView series into ``vtk/``.
     callbacks : functions f(simulation, row) called after every accepted step (row includes ``case``).
+        With ``workers`` or ``scheduler`` they (and a callable ``progress``) run in the worker
+        processes: they must pickle, and what they change stays there.
+    workers : int, optional
+        Compute the cases in parallel, one per task, on a local Dask cluster of this many worker
+        processes (one thread each; ``threads`` NGSolve threads each). Needs the extra
+        ``parallel`` (``pip install ngtmc[parallel]``). The files and the report are those of a
+        serial run; a failed case fails only itself (:class:`ngtmc.runner.parallel.CaseFailure`
+        after the others are written), and ``resume=True`` re-runs it. See docs/parallel.md.
+    scheduler : str, optional
+        Address of an existing Dask scheduler to send the cases to instead (its workers must see
+        the run folder and import ngtmc and the study).
 
     Raises StepFailure (after writing the history and metadata with status "failed") when a step
     fails at the minimum increment, and StudyError, before any folder is created or anything
@@ -124,13 +137,19 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     values, a bad scene, threads < 1) or a resume that would mix parameters.
     """
     return _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
-                    checkpoint_seconds, vtk, callbacks).out
+                    checkpoint_seconds, vtk, callbacks, workers=workers, scheduler=scheduler).out
 
 
 def _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
-             checkpoint_seconds, vtk, callbacks) -> "_Run":
+             checkpoint_seconds, vtk, callbacks, *, workers=None, scheduler=None) -> "_Run":
     """The work of :func:`run_study`; returns the finished run (its folder ``out``, and the
     Simulation of each case computed in this process in ``simulations``)."""
+    parallel = workers is not None or scheduler is not None
+    if parallel:
+        from .parallel import check_settings
+        check_settings(workers, scheduler)     # Dask installed, settings sane: before anything else
+    if threads == "auto":
+        threads = 1 if parallel else 2
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
                                 or threads < 1):
         raise StudyError(f"threads = {threads!r} is not allowed: give an integer >= 1 (NGSolve threads), "
@@ -175,9 +194,13 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
     run.progress.say(f"resolution {res!r}, output {out}")
     # outputs of the whole run (those of each case: _Run.run_case)
     outputs = [ReportOutput(out, strict=bool(report))] if (report or report is None) else []
+    run_cases = None
+    if parallel:
+        from .parallel import ParallelCases
+        run_cases = ParallelCases(run, workers, scheduler, threads)
     try:
         with _terminate_as_interrupt(), ngs.TaskManager():
-            run.run(resume, meta)
+            run.run(resume, meta, run_cases)
     except BaseException:
         # a failed or interrupted run still gets its report (with a status banner): nothing is lost
         for plugin in outputs:
