@@ -41,8 +41,8 @@ class CaseFailure(RuntimeError):
         what = "; ".join(f"case {name!r}: {err}" for name, err in self.failures.items())
         head = (f"case {next(iter(self.failures))!r} failed" if len(self.failures) == 1
                 else f"{len(self.failures)} of {n_cases} cases failed")
-        super().__init__(f"{head} ({what}); the other cases are written; resume to re-run "
-                         f"{'it' if len(self.failures) == 1 else 'them'}")
+        others = "; the other cases are written" if len(self.failures) < n_cases else ""
+        super().__init__(f"{head} ({what}){others}; resume to re-run {'it' if len(self.failures) == 1 else 'them'}")
 
 
 def require_dask():
