@@ -103,6 +103,43 @@ def test_failed_case_fails_alone_and_resume_completes_it(serial, tmp_path, how):
     _same_as_serial(serial, out)
 
 
+def test_interrupt_keeps_the_cases_and_resume_completes_them(serial, tmp_path):
+    """SIGTERM in the main process (as Ctrl-C) while case b is running: the cluster stops, b keeps
+    the steps of its last checkpoint with status interrupted, and a resume completes the run."""
+    import signal
+    import threading
+    import time
+    _distributed()
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("SIGTERM becomes KeyboardInterrupt only in the main thread")
+    marker = tmp_path / "b-at-step-6"
+
+    def hold_b(sim, row):     # in the worker of case b
+        if row["case"] == "b" and row["step"] == 6:
+            marker.touch()
+            time.sleep(120)
+
+    def terminate():
+        deadline = time.monotonic() + 120
+        while not marker.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        if marker.exists():
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    killer = threading.Thread(target=terminate, daemon=True)
+    killer.start()
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        run_study(tiny_study(names=CASES), output=out, workers=2, callbacks=[hold_b], checkpoint_every=4,
+                  checkpoint_seconds=1e9, **QUIET)
+    killer.join(5)
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "interrupted"
+    assert meta["results"]["b"]["status"] == "interrupted" and meta["results"]["b"]["steps"] == 4
+    run_study(tiny_study(names=CASES), output=out, resume=True, workers=2, **QUIET)
+    _same_as_serial(serial, out)
+
+
 def test_existing_scheduler_and_a_study_file(serial, tmp_path):
     distributed = _distributed()
     study = tmp_path / "two_cases.py"
