@@ -25,6 +25,7 @@ import uuid
 import pandas as pd
 
 from ..study import StudyError
+from .cases import _Run
 from .folder import case_results
 
 __all__ = ["CaseFailure", "ParallelCases", "EXTRA", "require_dask"]
@@ -103,17 +104,20 @@ def _dumps(obj) -> bytes:
     return cloudpickle.dumps(obj)
 
 
+class _CaseRun(_Run):
+    """One case of a run in a worker: the serial case code, its checkpoints and ParaView files;
+    the files of the whole run (history, snapshots, metadata) are the main process's."""
+
+    def write_all(self):
+        pass
+
+
 def compute_case(spec: bytes, name: str, checkpoint: dict | None, threads: int | None) -> dict:
     """In a worker: compute case ``name`` of the run described by ``spec`` with the serial case
     code, continuing from ``checkpoint`` if given. Returns what the checkpoint does not hold (the
     scene's mesh, force unit, thickness and features) and the error of a failed case, or None."""
     import cloudpickle
     import ngsolve as ngs
-    from .cases import _Run
-
-    class _CaseRun(_Run):
-        def write_all(self):   # the files of the whole run are the main process's
-            pass
 
     mod, resolution, p, out, overrides, settings = cloudpickle.loads(spec)
     run = _CaseRun(mod, resolution, p, Path(out), overrides, **settings)
