@@ -9,6 +9,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks import harness as H  # noqa: E402
+from benchmarks.parallel import compare_histories  # noqa: E402
 from benchmarks.run import parse_variants  # noqa: E402
 
 
@@ -116,3 +117,13 @@ def test_table_formatting():
 def test_jsonable():
     out = H.jsonable({"a": np.float64(np.nan), "b": np.arange(2), "c": (1, np.int64(2)), "d": np.bool_(True)})
     assert out == {"a": None, "b": [0, 1], "c": [1, 2], "d": True}
+
+
+def test_benchmark_compares_histories_without_the_times():
+    a = pd.DataFrame({"case": ["a", "a"], "step": [0, 1], "force": [0.0, 1.5], "wall_time": [0.0, 2.0]})
+    b = a.assign(wall_time=[0.0, 7.0])
+    assert compare_histories(a, b)["identical"] is True
+    c = b.assign(force=[0.0, 1.5 + 1e-12])
+    r = compare_histories(a, c)
+    assert r["identical"] is False and 0 < r["max_abs_difference"] < 1e-11
+    assert compare_histories(a, a.iloc[:1])["identical"] is False

@@ -192,3 +192,4 @@ def test_cli_forwards_workers_scheduler_and_threads(tmp_path, monkeypatch):
     assert seen["workers"] is None and seen["scheduler"] == "tcp://h:8786" and seen["threads"] == 2
     assert main(["run", "step-control"]) == 0
     assert seen["workers"] is None and seen["threads"] == "auto"
+
