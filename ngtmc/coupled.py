@@ -394,8 +394,16 @@ class CoupledNewton:
                             rmu, rma, _ = split(xN, tN)
                             merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2 + ((constraint(xN) / scale_g) ** 2 if path else 0.0)
                             if merit <= (1.0 - 1e-4 * step) * merit0:
+                                if _DEBUG:
+                                    print(f"    search: step {step:g} merit {merit:.3e} from {merit0:.3e}", flush=True)
                                 return True, lam_t, step, merit
+                        elif _DEBUG:
+                            print(f"    search: step {step:g} residual not finite", flush=True)
+                    elif _DEBUG:
+                        print(f"    search: step {step:g} J <= 0", flush=True)
                     step *= 0.5
+                if _DEBUG:
+                    print(f"    search: failed from {merit0:.3e}", flush=True)
                 return False, lam0, 0.0, math.inf
             finally:
                 tm["line_search"] += time.perf_counter() - t0
