@@ -43,7 +43,8 @@ regions, N/mm), times a growth factor: where the damage grows stably (the load g
 direction of the schedule) and a dissipation step converged in at most GROWTH_ITERATIONS Newton
 iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base;
 after a displacement step the factor is GROWTH_START (below 1: fine samples at the peak), and it
-doubles back to 1 along a snap-back; a cut-back caps it at 1.
+doubles back to 1 along a snap-back; a cut-back at factor g sets a ceiling g / 2**cutbacks (at least
+1), which GROWTH_CEILING_STEPS easy steps at it double again.
 
 Units: mm, N, MPa; D per mm of thickness in 2D.
 """
@@ -69,6 +70,13 @@ GROWTH_ITERATIONS = 6
 #: up to the base (snap-back steps) or up to GROWTH_MAX (stable growth, as above). With the base dD
 #: from the start the quick three-point bending's sampled peak was 1.2 % below the converged one.
 GROWTH_START = 0.25
+
+#: A cut-back of a dissipation step at growth factor g sets a ceiling of g / 2**cutbacks (at least
+#: 1) on the growth factor; GROWTH_CEILING_STEPS easy steps of stable growth at the ceiling double
+#: it again (up to GROWTH_MAX). Without it, the post-failure tail of the three-point bending at the
+#: paper's resolution went in cycles of five steps (growth 1, 2, 4, 8, then 16 failed in about 14
+#: Newton iterations and was cut back), so a third of its iterations were failed attempts.
+GROWTH_CEILING_STEPS = 16
 
 
 class DissipationPath:
@@ -107,6 +115,9 @@ class DissipationPath:
         self.delta_d_prev = 0.0
         #: growth factor of dD (GROWTH_START .. GROWTH_MAX, module docstring)
         self.growth = GROWTH_START
+        #: ceiling of the growth factor (GROWTH_CEILING_STEPS), and the easy steps taken at it
+        self.ceiling = GROWTH_MAX
+        self.at_ceiling = 0
         #: (t_start, t_end) of the schedule segment of the last attempt
         self.segment = None
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
@@ -144,6 +155,7 @@ class DissipationPath:
             self.dissipating = False
             self.rate = 0.0
             self.growth = GROWTH_START
+            self.ceiling, self.at_ceiling = GROWTH_MAX, 0
         self.segment = seg
         dD = self.target
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
@@ -262,11 +274,17 @@ class DissipationPath:
         if self._last_kind != "dissipation":
             self.growth = GROWTH_START
         elif cutbacks:
-            self.growth = min(self.growth, 1.0)
+            self.ceiling = max(1.0, self.growth / 2.0 ** cutbacks)
+            self.at_ceiling = 0
+            self.growth = min(self.growth, self.ceiling)
         elif not forward:
             self.growth = min(1.0, 2.0 * self.growth)
         elif iterations <= GROWTH_ITERATIONS:
-            self.growth = min(GROWTH_MAX, 2.0 * self.growth)
+            if self.growth >= self.ceiling:
+                self.at_ceiling += 1
+                if self.at_ceiling >= GROWTH_CEILING_STEPS:
+                    self.ceiling, self.at_ceiling = min(GROWTH_MAX, 2.0 * self.ceiling), 0
+            self.growth = min(self.ceiling, 2.0 * self.growth)
         self._last_kind = None
         d = self.coupled.dissipation()
         delta = d - self.d_prev
@@ -288,7 +306,7 @@ class DissipationPath:
 
     def get_state(self) -> dict:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
-        return {"growth": self.growth, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+        return {"growth": self.growth, "ceiling": self.ceiling, "at_ceiling": self.at_ceiling, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
                 "delta_d_prev": self.delta_d_prev}
 
@@ -321,4 +339,6 @@ class DissipationPath:
         self.dissipation_steps = int(st["dissipation_steps"])
         self.dissipating = bool(st.get("dissipating", False))
         self.growth = float(st.get("growth", GROWTH_START))
+        self.ceiling = float(st.get("ceiling", GROWTH_MAX))
+        self.at_ceiling = int(st.get("at_ceiling", 0))
         self.segment = st.get("segment")

@@ -156,3 +156,31 @@ def test_turning_point_starts_the_rule_afresh():
     assert np.all(np.diff(unload["load"]) < 0)
     assert unload.dissipated_energy.iloc[-1] - unload.dissipated_energy.iloc[0] <= 1e-9 * h.dissipated_energy.max()
     assert h["max_alpha"].iloc[-1] > 0.99
+
+
+def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
+    """The growth factor of dD doubles after easy steps of stable growth; a cut-back at growth g
+    sets a ceiling g / 2**cutbacks (at least 1) that holds until GROWTH_CEILING_STEPS easy steps
+    at it double it (so a tail that failed at 16x runs at 8x, not in cycles of 1, 2, 4, 8, 16)."""
+    from ngtmc.path import GROWTH_CEILING_STEPS, GROWTH_MAX
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    path, s = sim._path, sim.solver
+
+    def step(iterations, cutbacks=0):
+        path._last_kind = "dissipation"
+        s.load = path.load_n + 1e-5  # forward: the load goes on with the schedule
+        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
+        return path.growth
+
+    path.growth = 1.0
+    assert [step(4) for _ in range(5)] == [2.0, 4.0, 8.0, GROWTH_MAX, GROWTH_MAX]
+    assert step(20, cutbacks=1) == pytest.approx(GROWTH_MAX / 2)   # cut back at 16: ceiling 8
+    assert [step(4) for _ in range(GROWTH_CEILING_STEPS - 1)] == [GROWTH_MAX / 2] * (GROWTH_CEILING_STEPS - 1)
+    assert step(4) == GROWTH_MAX                                    # the ceiling doubles again
+    assert step(9) == GROWTH_MAX                                    # a hard step keeps the factor
+    assert step(20, cutbacks=2) == pytest.approx(GROWTH_MAX / 4)
+    path.growth = 1.0
+    assert step(20, cutbacks=3) == 1.0                              # the ceiling is at least 1
+    state = path.get_state()
+    assert state["ceiling"] == 1.0 and state["at_ceiling"] == 0
