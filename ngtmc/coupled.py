@@ -276,6 +276,12 @@ class CoupledNewton:
         def constraint(xv):
             return 0.5 * float(xv[nu:] @ self._wf_matvec(xv[nu:])) - d_target if path else 0.0
 
+        def merit_of(ru, ra, gv, scale_u):
+            """The line search's merit: each residual relative to its natural scale (units differ:
+            N and N mm): the reaction force of the step, the residual of a uniform unit alpha,
+            the dissipation step."""
+            return (ru / scale_u) ** 2 + (ra / self.alpha_residual_scale) ** 2 + ((gv / scale_g) ** 2 if path else 0.0)
+
         def failed(it, message):
             self._scatter()
             return NewtonResult(False, it, res_u, solve_time, assembly_time, 0, message)
@@ -371,7 +377,7 @@ class CoupledNewton:
             done = at_floor(it - 1, held)
             return done if done is not None else failed(it, message)
 
-        def search(dxN, dlam, merit0, scale_u, scale_a, lam0):
+        def search(dxN, dlam, merit0, scale_u, lam0):
             """Backtracking from x0 along (dx, dlambda) on the merit function, guard J > 0 and a
             finite residual; returns (accepted, load). The residual of an accepted iterate is
             left in tmp; a rejected search leaves the last trial in x (the caller restores x0)."""
@@ -392,11 +398,11 @@ class CoupledNewton:
                             if lifted:
                                 return True, lam_t, step, math.nan
                             rmu, rma, _ = split(xN, tN)
-                            merit = (rmu / scale_u) ** 2 + (rma / scale_a) ** 2 + ((constraint(xN) / scale_g) ** 2 if path else 0.0)
-                            if merit <= (1.0 - 1e-4 * step) * merit0:
+                            m = merit_of(rmu, rma, constraint(xN), scale_u)
+                            if m <= (1.0 - 1e-4 * step) * merit0:
                                 if _DEBUG:
-                                    print(f"    search: step {step:g} merit {merit:.3e} from {merit0:.3e}", flush=True)
-                                return True, lam_t, step, merit
+                                    print(f"    search: step {step:g} merit {m:.3e} from {merit0:.3e}", flush=True)
+                                return True, lam_t, step, m
                         elif _DEBUG:
                             print(f"    search: step {step:g} residual not finite", flush=True)
                     elif _DEBUG:
@@ -433,11 +439,8 @@ class CoupledNewton:
                     r_ref = res_u
                 if self._converged(res_u, res_a, g, reac, r_ref, s.newton.rtol, tol_a, scale_g if path else None):
                     return accept(it - 1, held)
-            # merit: each residual relative to its natural scale (units differ: N and N mm): the
-            # reaction force of the step, the residual of a uniform unit alpha, the dissipation step
             scale_u = max(reac, r_ref, s.newton.atol)
-            scale_a = self.alpha_residual_scale
-            merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2 + ((g / scale_g) ** 2 if path else 0.0)
+            merit0 = merit_of(res_u, res_a, g, scale_u)
             merits.append(merit0)
             if not lifted and len(merits) > STALL_WINDOW + 2 and merit0 > STALL_FACTOR * merits[-1 - STALL_WINDOW]:
                 # no nearby solution (a crack that wants to run at this load): stop early, the
@@ -460,7 +463,7 @@ class CoupledNewton:
             # where 2 H >> Gc/l0, was put on alpha = 1 and released again, step after step)
             c = self._ncp_scale = self.lin.diagonal_scale()
             res_u, res_a, held = split(xN, rN)
-            merit0 = (res_u / scale_u) ** 2 + (res_a / scale_a) ** 2 + ((g / scale_g) ** 2 if path else 0.0)
+            merit0 = merit_of(res_u, res_a, g, scale_u)
             free = self._free_base.copy()
             free[nu:] &= held == 0
             a_cur = xN[nu:]
@@ -473,7 +476,7 @@ class CoupledNewton:
                 return failed(it, "dissipation control: the damage does not respond to the load here")
             x0.data = x
             lam0 = lam
-            accepted, lam, step, merit = search(*d, merit0, scale_u, scale_a, lam0)
+            accepted, lam, step, merit = search(*d, merit0, scale_u, lam0)
             if not lifted and (not accepted or step < WEAK_STEP):
                 # the Newton direction does not reduce the merit function, or only along a small
                 # fraction of it (a near-singular or indefinite tangent): Levenberg steps, the
@@ -484,7 +487,7 @@ class CoupledNewton:
                     d = timed_direction(lambda: self.lin.shifted(free, mu), free, fixed_step, a_cur, g)
                     if d is None:
                         break
-                    ok, lam_l, step_l, merit_l = search(*d, merit0, scale_u, scale_a, lam0)
+                    ok, lam_l, step_l, merit_l = search(*d, merit0, scale_u, lam0)
                     if _DEBUG:
                         print(f"    levenberg mu {mu:g}: accepted {ok} step {step_l:g} merit {merit_l:.3e} "
                               f"(newton step {step:g} merit {merit:.3e})", flush=True)
