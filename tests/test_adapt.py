@@ -269,3 +269,29 @@ def test_exact_prolongation_needs_a_space_made_on_the_first_level():
         errors[made] = ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), mesh))
     assert errors["first level"] < 1e-12
     assert errors["after a refinement"] > 1e-3
+
+
+def test_squeezed_void_is_refined_by_the_J_indicator():
+    """Two blocks pressed together through a void layer: once J < J_threshold in the void, the void
+    is refined to h_void and the step is solved again there; nothing may break in this scene."""
+    scene = two_blocks(maxh=0.2, void_maxh=0.05)
+    option = Adaptivity(h_crack=1.0, h_void=0.0125, J_threshold=0.5)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.03]),
+                           ngtmc.AdaptiveStepControl(du_max=0.01, k_u=0.0, du_min=1e-8), compile=True, adapt=option)
+    h = sim.run().history
+    assert h["min_J"].iloc[-1] < 0.5 and h["elements"].iloc[-1] > 5 * h["elements"].iloc[0]
+    assert h["elements"].iloc[2] == h["elements"].iloc[0]  # J > 0.5 before: nothing refined
+    s = sim.solver
+    void = np.array([el.mat == "void" for el in s.mesh.Elements(ngs.VOL)])
+    assert s.h[void].max() <= 0.0125 * (1 + 1e-9)
+
+
+def test_monolithic_scheme_runs_with_refinement():
+    scene = notched_plate(maxh=0.2, h_band=0.2, l0=0.1)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.002]),
+                           ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=0.0, du_min=1e-8), compile=True,
+                           scheme="monolithic", adapt=Adaptivity(h_crack=0.05, alpha_threshold=0.01))
+    h = sim.run().history
+    assert sim.refinements and h["dofs"].iloc[-1] > h["dofs"].iloc[0]
+    assert sim.coupled.s is sim.solver and sim.coupled.nu == sim.solver.fes_u.ndof
+    assert np.all(np.isfinite(h["force"]))
