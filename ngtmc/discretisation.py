@@ -11,7 +11,7 @@ import re
 
 import ngsolve as ngs
 
-__all__ = ["real_compile", "rules", "lower_order_outside"]
+__all__ = ["real_compile", "rules", "lower_order_outside", "bilinear_form"]
 
 _REAL_COMPILE_FAILED = []
 
@@ -47,11 +47,52 @@ def rules(mesh, order: int) -> dict:
     return {et: ngs.IntegrationRule(et, order) for et in types}
 
 
-def lower_order_outside(fes, mesh, regions: str):
+def bilinear_form(fes, **flags):
+    """``ngs.BilinearForm(fes, **flags)`` that keeps the matrix of the finest mesh only.
+
+    NGSolve keeps one matrix per mesh level by default (for multigrid): after each
+    ``mesh.Refine()`` the next assembly allocates a new matrix and the old ones stay alive (about
+    32 MB per refinement at 116k dofs, measured). The flag ``nonmultilevel`` drops them; NGSolve
+    prints a warning that the flag is undocumented (it is read: tests/test_adapt.py), which is
+    kept off the console (stderr). Every form that lives through an adaptive run is made here."""
+    with _quiet_stderr():
+        return ngs.BilinearForm(fes, nonmultilevel=True, **flags)
+
+
+class _quiet_stderr:
+    """Keep what a block writes to stderr (NGSolve's flag warnings, from C++ or Python) off the
+    console: file descriptor 2 goes to /dev/null for the block."""
+
+    def __enter__(self):
+        import contextlib
+        import io
+        import os
+        import sys
+        sys.stderr.flush()
+        self._saved = os.dup(2)
+        self._null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(self._null, 2)
+        self._cm = contextlib.redirect_stderr(io.StringIO())
+        self._cm.__enter__()
+
+    def __exit__(self, *exc):
+        import os
+        self._cm.__exit__(*exc)
+        os.dup2(self._saved, 2)
+        os.close(self._saved)
+        os.close(self._null)
+        return False
+
+
+def lower_order_outside(fes, mesh, regions: str, order: int | None = None):
     """Set order 1 on every node (edge, face, cell) of ``fes`` that belongs to no element of
     ``regions`` (regex); the elements there keep the full order on all their nodes, so the
     space stays conforming. "Model only what a scene needs", per element: the Hessian regulariser
-    needs order 2, the rest of the scene does not."""
+    needs order 2, the rest of the scene does not.
+
+    ``order``: also set this order explicitly on the nodes that keep the full order. Needed after
+    a refinement: NGSolve does not carry the per-node orders over to the refined mesh (the space
+    comes back with the full order on new nodes), so every node is set again."""
     keep = {ngs.EDGE: set(), ngs.FACE: set()}
     d = mesh.dim
     for el in mesh.Elements(ngs.VOL):
@@ -62,12 +103,18 @@ def lower_order_outside(fes, mesh, regions: str):
     for e in range(mesh.nedge):
         if e not in keep[ngs.EDGE]:
             fes.SetOrder(ngs.NodeId(ngs.EDGE, e), 1)
+        elif order is not None:
+            fes.SetOrder(ngs.NodeId(ngs.EDGE, e), order)
     if d == 3:
         for f in range(mesh.nface):
             if f not in keep[ngs.FACE]:
                 fes.SetOrder(ngs.NodeId(ngs.FACE, f), 1)
+            elif order is not None:
+                fes.SetOrder(ngs.NodeId(ngs.FACE, f), order)
     inner = ngs.FACE if d == 2 else ngs.CELL
     for el in mesh.Elements(ngs.VOL):
         if not re.fullmatch(regions, el.mat):
             fes.SetOrder(ngs.NodeId(inner, el.nr), 1)
+        elif order is not None:
+            fes.SetOrder(ngs.NodeId(inner, el.nr), order)
     fes.Update()

@@ -93,6 +93,18 @@ _MATERIAL_KEYS = ("E", "nu", "Gc", "l0")
 
 
 # ====================================================================== recorded path
+#: What the adjoint says about a run whose mesh changed (adaptive refinement, :mod:`ngtmc.adapt`).
+CHANGED_MESH = ("the adjoint needs one mesh for the whole load path, and {what} (adaptive refinement): record "
+                "the path on the final mesh instead, without adapt: record_path(result.solver.scene, ...) with the "
+                "scene of the adaptive run's final mesh (its density follows the refined elements)")
+
+
+def refuse_changed_mesh(solver, what: str = "this path's mesh changed after it was recorded"):
+    """ValueError (:data:`CHANGED_MESH`) when the solver's mesh was refined (``mesh_generation``)."""
+    if getattr(solver, "mesh_generation", 0):
+        raise ValueError(CHANGED_MESH.format(what=what))
+
+
 @dataclass
 class Path:
     """A recorded load path: the solver, the load sequence and every accepted state.
@@ -300,6 +312,8 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     :class:`Path`). Returns a :class:`Path`."""
     if checkpoint_every is not None and int(checkpoint_every) < 1:
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
+    if options.get("adapt") is not None:
+        raise ValueError(CHANGED_MESH.format(what="adapt= refines the mesh during the run"))
     scheme = options.get("scheme", "single-pass")
     if scheme not in ("single-pass", "monolithic", "path-following"):
         raise ValueError(f"record_path: scheme={scheme!r} cannot be differentiated so far; the schemes with an "
@@ -339,6 +353,7 @@ def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = 
     step. Returns a new :class:`Path` (sharing the solver). A path of a monolithic scheme is replayed
     by :func:`ngtmc.sensitivities_coupled.replay_coupled` (same step types, loads and dissipation
     targets)."""
+    refuse_changed_mesh(path.solver)
     if getattr(path, "coupled", None) is not None:
         from .sensitivities_coupled import replay_coupled
         return replay_coupled(path, rho, parameters)
@@ -834,6 +849,7 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
     held fixed (see the module docstring). Only the solver's fields are changed; the solver is
     left in the final state of the path. A path of a monolithic scheme is differentiated by
     :func:`ngtmc.sensitivities_coupled.coupled_gradient`."""
+    refuse_changed_mesh(path.solver)
     if getattr(path, "coupled", None) is not None:
         from .sensitivities_coupled import coupled_gradient
         return coupled_gradient(path, objective, wrt)

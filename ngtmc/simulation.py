@@ -123,12 +123,19 @@ class Simulation:
         Safety limit on accepted steps.
     compile : "auto", True, "real" or False
         How the energy expressions are compiled (see :class:`ngtmc.solver.Solver`).
+    adapt : Adaptivity, optional
+        Refine the mesh during the run where the crack is or is about to be (and, with
+        ``h_void``, where the void is squeezed), re-solving each step on the refined mesh
+        (:mod:`ngtmc.adapt`). The run refines a copy of the scene's mesh (the scene passed in is
+        not changed); the final mesh is ``solver.mesh`` and the scene on it ``solver.scene``. The
+        history gains the columns ``dofs`` and ``elements``.
     """
 
     def __init__(self, scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
                  scheme: str = "single-pass", staggered_tol: float = 1e-3, max_staggered: int = 30,
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
-                 max_steps: int = 100000, compile: bool | str = "auto", coupled: dict | None = None):
+                 max_steps: int = 100000, compile: bool | str = "auto", coupled: dict | None = None,
+                 adapt=None):
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be an ngtmc.Scene, got {type(scene).__name__}")
         if not isinstance(schedule, Schedule):
@@ -145,6 +152,15 @@ class Simulation:
             raise ValueError(f"scheme = {scheme!r} is not one of {', '.join(map(repr, SCHEMES))}")
         if not (staggered_tol > 0):
             raise ValueError(f"staggered_tol = {staggered_tol!r} must be > 0")
+        if adapt is not None:
+            from .adapt import Adaptivity, private_scene
+            if not isinstance(adapt, Adaptivity):
+                raise TypeError(f"adapt must be an ngtmc.Adaptivity (h_crack mm, ...), got {type(adapt).__name__}")
+            if scheme == "path-following" or (coupled or {}).get("path") is not None:
+                raise ValueError("adapt: adaptive refinement does not support path following so far; use scheme="
+                                 "'single-pass', 'staggered' or 'monolithic'")
+            scene = private_scene(scene)  # the run refines its own copy of the mesh
+        self.adapt = adapt
         self.scene = scene
         self.schedule = schedule
         self.control = control
@@ -154,6 +170,11 @@ class Simulation:
         self.progress = progress
         self.max_steps = int(max_steps)
         self.solver = Solver(scene, newton=newton, compile=compile)
+        if adapt is not None:
+            from .adapt import check_solver
+            check_solver(self.solver)
+        #: refinements of the run (:class:`ngtmc.adapt.RefinementRecord`, with the step they followed)
+        self.refinements: list = []
         self.coupled = None
         copt = dict(coupled or {})
         if scheme == "path-following":
@@ -172,6 +193,7 @@ class Simulation:
         path_du_max = copt.pop("du_max", None)
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
+        self._coupled_options = dict(copt)
         if scheme in ("monolithic", "path-following") and self.solver.alpha is not None:
             from .coupled import CoupledNewton
             self.coupled = CoupledNewton(self.solver, **copt)
@@ -237,6 +259,9 @@ class Simulation:
             "solve_time": info["solve_time"],
             "assembly_time": info["assembly_time"],
         }
+        if self.adapt is not None:
+            row["dofs"] = s.fes_u.ndof + (s.fes_a.ndof if s.fes_a is not None else 0)
+            row["elements"] = s.mesh.ne
         if len(forces) > 1:
             row.update({f"force_{n}": f for n, f in forces.items()})
         row.update({f"displacement_{n}": v for n, v in s.load_displacements().items()})
@@ -428,6 +453,8 @@ class Simulation:
             ok, info = self._attempt(t_new)
             for k in totals:
                 totals[k] += info[k]
+            if ok and self.adapt is not None:
+                ok, info, saved = self._refine_and_resolve(t_new, info, saved, totals)
             if ok:
                 t_new = info.get("t_new", t_new)  # path following solves for the load
                 break
@@ -459,6 +486,35 @@ class Simulation:
             self._path.accepted(step_size, totals["newton_iterations"], cutbacks)
         self._report_progress(row)
         return row
+
+    def _refine_and_resolve(self, t_new: float, info: dict, saved: dict, totals: dict):
+        """After a converged step to ``t_new``: mark (:func:`ngtmc.adapt.mark`, on the step's trial
+        history), refine and transfer the state of the step and ``saved`` (the state before it),
+        then solve the step again on the refined mesh from ``saved`` with the refined solution as
+        predictor; repeat until nothing is marked (at most ``max_rounds`` times). Returns (ok,
+        info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
+        cuts the step back as for any failed step."""
+        from . import adapt as amr
+        s = self.solver
+        for _ in range(self.adapt.max_rounds):
+            marked = amr.mark(s, self.adapt, info.get("H_trial"))
+            if not marked.any():
+                break
+            record, (saved,) = amr.refine(s, marked, [saved])
+            self.refinements.append((self.step + 1, record))
+            if self.coupled is not None:  # its compound space and forms are built on the solver's
+                from .coupled import CoupledNewton
+                self.coupled = CoupledNewton(s, **self._coupled_options)
+            u_pred = s.u.vec.FV().NumPy().copy()
+            s.set_state(saved)
+            s.u.vec.FV().NumPy()[:] = u_pred
+            ok, info = self._attempt(t_new)
+            for k in totals:
+                totals[k] += info[k]
+            if not ok:
+                info["message"] = f"re-solve on the refined mesh failed ({info.get('message', '')})"
+                return False, info, saved
+        return True, info, saved
 
     def _force_control_peak(self) -> str:
         """Under force control (only Traction loads), a message when the last accepted steps show a
@@ -518,6 +574,8 @@ class Simulation:
         this scene's unit (:attr:`force_unit`: ``"N/mm"`` in 2D with thickness 1 mm, else ``"N"``),
         as in a run folder's metadata."""
         units = history_units({ld.label: type(ld).__name__ for ld in self.scene.loads})
+        if self.adapt is not None:
+            units.update(dofs="-", elements="-")
         return {k: (self.force_unit if (k == "force" or k.startswith("force_")) else v) for k, v in units.items()}
 
     # ------------------------------------------------------------------ checkpoints

@@ -29,7 +29,7 @@ from . import contact_regularisation as creg
 from . import fracture
 from . import splits
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
-from .discretisation import lower_order_outside, real_compile, rules
+from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
 from .scene import DisplacementField, DisplacementLoad, Point, Scene, Support, Traction, _names
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
@@ -133,16 +133,12 @@ class Solver:
                 kw[key] = _regex(dirichlet[c])
         self.fes_u = ngs.VectorH1(mesh, order=p, **kw)
         self._variable_order = p >= 2 and scene.order is None and scene.variable_order and scene.regulariser is not None
-        if self._variable_order:
-            lower_order_outside(self.fes_u, mesh, _regex(_names(scene.regulariser.regions)))
+        self._point_held = point_held   # (vertex, component): vertices keep their numbers in a refinement
+        #: number of times the mesh changed under this solver (:meth:`mesh_changed`, adaptive refinement)
+        self.mesh_generation = 0
+        self._apply_orders()
         self.u = ngs.GridFunction(self.fes_u, name="displacement")
-        self.free = self.fes_u.FreeDofs()
-        if point_held:  # vertex conditions: the free-dof mask is ours, not the space's
-            self.free = ngs.BitArray(self.free)
-            for v, c in point_held:
-                self.free.Clear(self._vertex_dof(v, c))
-        self._free_np = np.array(list(self.free), dtype=bool)
-        self._dir_np = ~self._free_np
+        self._free_dofs()
 
         self.rho = ngs.GridFunction(ngs.L2(mesh, order=0), name="density")
         self.rho.vec.FV().NumPy()[:] = scene.element_density()
@@ -174,7 +170,6 @@ class Solver:
         self.G = self.G0 * self.gamma
         self.Gc = self.Gc0 * gc_interpolation(self.rho, scene.gc_a, scene.gc_b)
         self.E_max = max(m.E for m in mat_of.values())
-        self.h = scene.element_sizes()
         pts = np.asarray(mesh.ngmesh.Coordinates())
         self.length_scale = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
         if self.newton.atol is None:
@@ -216,19 +211,70 @@ class Solver:
             self.alpha_committed = None
 
         # ------------------------------------------------------------ displacement energy
+        self._quadratic_forms = []   # the _QuadraticPlus wrappers of _energy_form, for mesh_changed
         self.a_u = self._energy_form(self.fes_u.TrialFunction())
         if self._tractions:
-            self.a_u = _ExternalWork(self.a_u, self._f_ext, self)
-        self._inv = None
+            self.a_u = _ExternalWork(self.a_u, self)
         self._a_shift = None
+        self._mesh_data(loads=False)  # the loads are built above (the tractions decide the form)
+        #: accumulated seconds per part of the solution procedure (see TIMING_KEYS)
+        self.timings = dict.fromkeys(TIMING_KEYS, 0.0)
+
+    # ================================================================= mesh-dependent data
+    def _apply_orders(self):
+        """Order 1 outside the regulariser's regions when the order varies per element
+        (:func:`~ngtmc.discretisation.lower_order_outside`); after a refinement every node is set
+        again (NGSolve gives new nodes the full order)."""
+        if self._variable_order:
+            lower_order_outside(self.fes_u, self.mesh, _regex(_names(self.scene.regulariser.regions)),
+                                order=self.order if self.mesh_generation else None)
+
+    def _free_dofs(self):
+        """Free-dof mask of the displacement: the space's Dirichlet boundaries, and the vertex
+        conditions (Point supports and loads), which are ours, not the space's."""
+        self.free = self.fes_u.FreeDofs()
+        if self._point_held:
+            self.free = ngs.BitArray(self.free)
+            for v, c in self._point_held:
+                self.free.Clear(self._vertex_dof(v, c))
+        self._free_np = np.array(list(self.free), dtype=bool)
+        self._dir_np = ~self._free_np
+
+    def _mesh_data(self, loads: bool = True):
+        """Everything besides the spaces and forms that depends on the mesh: element sizes, the
+        loads' dofs and fields, work vectors, factorizations (dropped)."""
+        self.h = self.scene.element_sizes()
+        if loads:
+            self._build_loads()
+        self._inv = None
+        self._inv_alpha = None
         self._r = self.u.vec.CreateVector()
         self._du = self.u.vec.CreateVector()
         self._w = self.u.vec.CreateVector()
         self._tmp = self.u.vec.CreateVector()
         self._u0 = self.u.vec.CreateVector()
         self._r_valid = False  # True while self._r holds the residual of the current u
-        #: accumulated seconds per part of the solution procedure (see TIMING_KEYS)
-        self.timings = dict.fromkeys(TIMING_KEYS, 0.0)
+        for q in self._quadratic_forms:
+            q.mesh_changed()
+
+    def mesh_changed(self):
+        """Bring the solver to its (refined) mesh: NGSolve has already updated the spaces and
+        prolongated the GridFunctions (``autoupdate``); here the per-node orders, the free-dof
+        mask, the pseudo-density (from ``scene.element_density()``, which the caller updates for
+        a density given per element), the loads, the constant regulariser matrix, the
+        factorizations and work vectors follow. The values of ``u``, ``alpha`` and the history,
+        and their committed copies, are the caller's to transfer (:mod:`ngtmc.adapt`); the
+        committed arrays are resized here only when their length no longer fits (zeros)."""
+        self.mesh_generation += 1
+        self._apply_orders()
+        self.u.Update()
+        self._free_dofs()
+        self.rho.vec.FV().NumPy()[:] = self.scene.element_density()
+        self._mesh_data()
+        if self.H_committed.size != self.irs.ndof:
+            self.H_committed = np.zeros(self.irs.ndof)
+        if self.alpha is not None and self.alpha_committed.size != self.fes_a.ndof:
+            self.alpha_committed = np.zeros(self.fes_a.ndof)
 
     # ================================================================= energies
     def _maybe_compile(self, cf):
@@ -307,12 +353,12 @@ class Solver:
         A term whose energy is quadratic in u (the Hessian regulariser without damping) has a
         constant tangent: it is assembled once and added (:class:`_QuadraticPlus`) instead of
         being re-assembled at every Newton iteration."""
-        a = ngs.BilinearForm(self.fes_u, symmetric=True)
+        a = bilinear_form(self.fes_u, symmetric=True)
         quadratic = None
         for name, density, regions in self.energy_terms(trial):
             term = ngs.Variation(self._maybe_compile(density) * self.energy_measure(name, regions))
             if name == "regularisation" and self.scene.regulariser.damping == "none":
-                quadratic = ngs.BilinearForm(self.fes_u, symmetric=True)
+                quadratic = bilinear_form(self.fes_u, symmetric=True)
                 quadratic += term
                 # a zero term on every element gives K the sparsity pattern of the tangent
                 quadratic += ngs.Variation(ngs.Parameter(0.0) * ngs.InnerProduct(trial, trial) * ngs.dx)
@@ -322,7 +368,9 @@ class Solver:
             a += ngs.Variation(extra)
         if quadratic is None:
             return a
-        return _QuadraticPlus(a, quadratic, self._design_key)
+        q = _QuadraticPlus(a, quadratic, self._design_key)
+        self._quadratic_forms.append(q)
+        return q
 
     def _design_key(self) -> tuple:
         """Everything a constant tangent depends on besides u: the pseudo-density and the material
@@ -733,7 +781,7 @@ class Solver:
         a_t, b_t = self.fes_a.TnT()
         dxf = ngs.dx(definedon=self.mesh.Materials(self._frac_re))
         dxHf = ngs.dx(definedon=self.mesh.Materials(self._frac_re), intrules=self.irs.GetIntegrationRules())
-        self.a_alpha = ngs.BilinearForm(self.fes_a, symmetric=True)
+        self.a_alpha = bilinear_form(self.fes_a, symmetric=True)
         self.f_alpha = ngs.LinearForm(self.fes_a)
         bil, lin = fracture.alpha_driving_form(a_t, b_t, self.H, self.Gc, self.l0, dxHf, dxf)
         self.a_alpha += bil
@@ -836,8 +884,13 @@ class _ExternalWork:
     Newton solve under way, or the current load for a reaction. The tangent is the form's (dead
     loads)."""
 
-    def __init__(self, form, f, solver):
-        self.form, self.f, self.solver = form, f, solver
+    def __init__(self, form, solver):
+        self.form, self.solver = form, solver
+
+    @property
+    def f(self):
+        """The traction vector per unit lambda (the solver's, rebuilt when the mesh changes)."""
+        return self.solver._f_ext
 
     def Apply(self, x, y):
         self.form.Apply(x, y)
@@ -865,8 +918,12 @@ class _QuadraticPlus:
 
     def __init__(self, form, quadratic, key):
         self.form, self.quadratic, self.key = form, quadratic, key
+        self.mesh_changed()
+
+    def mesh_changed(self):
+        """New vectors for the space's new size; K is assembled again at its next use."""
         self._key = None
-        self._zero = ngs.GridFunction(quadratic.space).vec
+        self._zero = ngs.GridFunction(self.quadratic.space).vec
         self._t = self._zero.CreateVector()
 
     @property

@@ -1,0 +1,322 @@
+"""Adaptive mesh refinement during a run: refine where the crack is, or is about to be.
+
+    sim = Simulation(scene, schedule, control, adapt=Adaptivity(h_crack=l0 / 4))
+
+After every accepted load step, :class:`~ngtmc.simulation.Simulation` asks :func:`mark` which
+elements to refine, refines them by NGSolve's bisection (:func:`refine`), and solves the same step
+again on the refined mesh, from the state before the step with the refined solution as predictor
+(predictor-corrector), until nothing is marked. There is no coarsening.
+
+Marked (and larger than their target size) are the elements
+
+* of the fracture regions where alpha exceeds ``alpha_threshold`` at a history point, or where
+  the history H reaches ``history_fraction`` of the level H_c = Gc(rho) / (6 l0) at which AT-2
+  reaches its peak stress (alpha = 1/4 under homogeneous tension: "about to break"); target size
+  ``h_crack``;
+* of the void (rho < 1/2) where J falls below ``J_threshold`` at a quadrature point (a squeezed
+  third medium, under an indenter); target size ``h_void`` (None: no J indicator);
+* and ``buffer`` layers of neighbours (sharing a vertex) of those, with the target of their own
+  region, so that a crack tip that moves within a step stays on the fine mesh.
+
+The transfer to the refined mesh (:func:`refine`):
+
+* u: exactly. NGSolve's prolongation of a space with per-node orders is not exact for order 2
+  (only the vertex part is; 0.026 error on a quadratic field, measured), so u is carried through
+  a uniform-order space with ``hoprolongation=True`` (exact on triangles) and set back;
+* alpha (P1) by NGSolve's prolongation, exact: a bisection puts the new vertex at an edge midpoint
+  where the P1 field is the mean of the edge's ends (on a curved boundary the new vertex is moved
+  onto the geometry and keeps that value);
+* the history H without loss: an element that was not refined keeps its values; every child of a
+  refined element takes, at each of its points, the largest value of its parent's points. Damage
+  never heals through a transfer (the value at a child's point is at least the parent's value at
+  any of the parent's points, so at least any field interpolated from them within the parent's
+  range); a homogeneous H stays exactly as it is;
+* the pseudo-density: an element given per element (array) follows its parent; a density given
+  per region follows the region names, which children keep.
+
+Curved geometry stays curved: the mesh is curved again at its order after each refinement.
+
+Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); schemes
+"single-pass", "staggered" and "monolithic" (path following keeps arrays of the mesh it started
+on); the adjoint of :mod:`ngtmc.sensitivities` refuses a run whose mesh changed; a run folder
+(``simulate(out_dir=...)``) does not take ``adapt`` yet (snapshots of a changing mesh).
+
+Units: mm.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+import math
+import re
+
+import numpy as np
+import ngsolve as ngs
+
+from .materials import check_number, deformation_gradient
+
+__all__ = ["Adaptivity", "mark", "refine", "RefinementRecord", "private_scene", "transfer_history"]
+
+
+@dataclass(frozen=True)
+class Adaptivity:
+    """Refinement during a run (see the module docstring).
+
+    h_crack: target element size in the fracture regions, mm (> 0; e.g. l0 / 4); elements of at
+    most this size (longest edge) are not refined. alpha_threshold: alpha above which an element
+    is refined (dimensionless, in (0, 1)). history_fraction: fraction of H_c = Gc / (6 l0) above
+    which an element is refined (in (0, 1]). h_void: target size in the void for the J indicator,
+    mm (None: no refinement of the void). J_threshold: J below which a void element is refined
+    (in (0, 1)). buffer: layers of neighbours refined with a marked element (>= 0). max_rounds:
+    refinement rounds (each followed by a re-solve) after one step at most (>= 1).
+
+    Defaults measured on the notched plate of benchmarks/adaptivity.py (docs/adaptivity.md):
+    alpha 0.2 / H_c 1.0 gave the pre-refined band's peak to 0.4 % with 71 % of its dofs at the
+    peak; alpha 0.1 / 0.75 H_c refined most of the plate before the peak (58k dofs against 4k).
+    """
+
+    h_crack: float
+    alpha_threshold: float = 0.2
+    history_fraction: float = 1.0
+    h_void: float | None = None
+    J_threshold: float = 0.5
+    buffer: int = 1
+    max_rounds: int = 10
+
+    def __post_init__(self):
+        check_number("Adaptivity h_crack", self.h_crack, "mm")
+        if not (math.isfinite(self.h_crack) and self.h_crack > 0):
+            raise ValueError(f"Adaptivity h_crack = {self.h_crack!r} mm must be finite and > 0")
+        if self.h_void is not None:
+            check_number("Adaptivity h_void", self.h_void, "mm")
+            if not (math.isfinite(self.h_void) and self.h_void > 0):
+                raise ValueError(f"Adaptivity h_void = {self.h_void!r} mm must be finite and > 0 (or None)")
+        for name, lo, hi in (("alpha_threshold", 0.0, 1.0), ("J_threshold", 0.0, 1.0)):
+            v = getattr(self, name)
+            if not (lo < v < hi):
+                raise ValueError(f"Adaptivity {name} = {v!r} is outside the allowed range ({lo:g}, {hi:g})")
+        if not (0.0 < self.history_fraction <= 1.0):
+            raise ValueError(f"Adaptivity history_fraction = {self.history_fraction!r} is outside (0, 1]")
+        if int(self.buffer) != self.buffer or self.buffer < 0:
+            raise ValueError(f"Adaptivity buffer = {self.buffer!r} must be an integer >= 0")
+        if int(self.max_rounds) != self.max_rounds or self.max_rounds < 1:
+            raise ValueError(f"Adaptivity max_rounds = {self.max_rounds!r} must be an integer >= 1")
+
+
+@dataclass
+class RefinementRecord:
+    """One refinement: elements marked, elements and displacement dofs before and after."""
+
+    marked: int
+    elements_before: int
+    elements_after: int
+    dofs_before: int
+    dofs_after: int
+
+
+def private_scene(scene):
+    """The scene on a copy of its mesh (curved at the same order; a density array copied), for a
+    run that refines its mesh without changing the caller's scene or mesh."""
+    import dataclasses
+    mesh = scene.mesh
+    copy = ngs.Mesh(mesh.ngmesh.Copy())
+    if mesh.GetCurveOrder() > 1:
+        copy.Curve(mesh.GetCurveOrder())
+    density = scene.density
+    if density is not None and not isinstance(density, Mapping):
+        density = np.array(density, dtype=float, copy=True)
+    return dataclasses.replace(scene, mesh=copy, density=density, _checked=False)
+
+
+def check_solver(solver):
+    """ValueError when the solver's scene cannot be refined by this module (3D, quadrilaterals)."""
+    mesh = solver.mesh
+    if mesh.dim != 2:
+        raise ValueError("adaptive refinement (Adaptivity) is implemented for 2D meshes only so far")
+    if any(el.type != ngs.ET.TRIG for el in mesh.Elements(ngs.VOL)):
+        raise ValueError("adaptive refinement (Adaptivity) needs a mesh of triangles (bisection, exact "
+                         "high-order prolongation)")
+
+
+def _per_element(values: np.ndarray, ne: int) -> np.ndarray:
+    """Values at the points of an IntegrationRuleSpace as (elements, points per element). The
+    space numbers its dofs element by element, the same number of points in each (one element
+    type); checked."""
+    if values.size % ne:
+        raise RuntimeError(f"{values.size} integration-point values do not divide into {ne} elements")
+    return values.reshape(ne, values.size // ne)
+
+
+def _element_regions(solver) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean masks over the elements: in a fracture region, in the void (rho < 1/2)."""
+    mesh = solver.mesh
+    mats = mesh.GetMaterials()
+    frac_ids = [i for i, m in enumerate(mats) if solver._frac_re and re.fullmatch(solver._frac_re, m)]
+    idx = np.array([el.index for el in mesh.Elements(ngs.VOL)])
+    frac = np.isin(idx, frac_ids)
+    void = solver.rho.vec.FV().NumPy() < 0.5
+    return frac, void
+
+
+def _neighbours(mesh, flags: np.ndarray) -> np.ndarray:
+    """Elements sharing a vertex with a flagged element (the flagged ones included)."""
+    nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    hit = np.zeros(mesh.nv, dtype=bool)
+    hit[nodes[flags].ravel()] = True
+    return hit[nodes].any(axis=1)
+
+
+def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None) -> np.ndarray:
+    """Elements to refine (boolean array over the elements) for the solver's current state.
+
+    H: history at the history points (MPa), default the committed one; pass the trial history
+    of a step not yet committed. See the module docstring for the indicators."""
+    mesh = solver.mesh
+    ne = mesh.ne
+    frac, void = _element_regions(solver)
+    target = np.full(ne, np.inf)
+    flags = np.zeros(ne, dtype=bool)
+    if solver.alpha is not None:
+        H = solver.H_committed if H is None else H
+        scratch = solver._scratch_irs
+        scratch.Interpolate(solver.Gc / (6.0 * solver.l0))
+        Hc = _per_element(scratch.vec.FV().NumPy().copy(), ne)
+        Hn = _per_element(np.asarray(H), ne)
+        scratch.Interpolate(solver.alpha)
+        al = _per_element(scratch.vec.FV().NumPy(), ne)
+        crack = ((Hn >= adapt.history_fraction * Hc).any(axis=1) | (al > adapt.alpha_threshold).any(axis=1)) & frac
+        flags |= crack
+        target[frac] = adapt.h_crack
+    if adapt.h_void is not None and void.any():
+        solver._scratch_guard.Interpolate(ngs.Det(deformation_gradient(solver.u)))
+        J = _per_element(solver._scratch_guard.vec.FV().NumPy(), ne)
+        flags |= (J < adapt.J_threshold).any(axis=1) & void
+        target[void & ~frac] = adapt.h_void
+    for _ in range(int(adapt.buffer)):
+        if not flags.any():
+            break
+        flags = _neighbours(mesh, flags)
+    return flags & (solver.h > target * (1.0 + 1e-9))
+
+
+def _ancestors(mesh, ne_old: int) -> np.ndarray:
+    """For every element of the refined mesh, the element of the mesh before the refinement that
+    contains it. A refined element keeps its number for one child; the others are appended, each
+    with a parent (possibly itself appended in the same refinement)."""
+    ne = mesh.ne
+    anc = np.arange(ne)
+    parent = np.array([mesh.GetParentElement(ngs.ElementId(ngs.VOL, i)).nr for i in range(ne_old, ne)], dtype=np.int64)
+    anc[ne_old:] = parent
+    for _ in range(64):
+        deep = anc[ne_old:] >= ne_old
+        if not deep.any():
+            return anc
+        anc[ne_old:][deep] = anc[anc[ne_old:][deep]]
+    raise RuntimeError("the parent chain of a refinement did not end in an element of the previous mesh")
+
+
+def transfer_history(H_old: np.ndarray, ancestors: np.ndarray, ne_old: int, npts_new: int) -> np.ndarray:
+    """The history on the refined mesh without loss: an element not refined keeps its values, every
+    child of a refined element gets the largest value of its parent's points at all its points."""
+    Hp = _per_element(np.asarray(H_old, dtype=float), ne_old)
+    if Hp.shape[1] != npts_new:
+        raise RuntimeError("the history rule changed its number of points in a refinement")
+    refined = np.zeros(ne_old, dtype=bool)
+    refined[ancestors[ne_old:]] = True
+    out = np.empty((ancestors.size, npts_new))
+    out[:ne_old] = Hp
+    out[:ne_old][refined] = Hp[refined].max(axis=1, keepdims=True)
+    out[ne_old:] = Hp[ancestors[ne_old:]].max(axis=1, keepdims=True)
+    return out.ravel()
+
+
+def _carrier_space(solver):
+    """The uniform-order space through which u is carried to a refined mesh, made once per solver
+    on the mesh's first level and kept: an ``hoprolongation`` space prolongates exactly only if
+    it has existed since the first level of the mesh (one made on an already refined mesh gave an
+    error of 0.086 on a quadratic field, silently; tests/test_adapt.py)."""
+    aux = getattr(solver, "_adapt_carrier", None)
+    if aux is None:
+        if solver.mesh.levels != 1:
+            raise ValueError("adaptive refinement needs a mesh that has not been refined by NGSolve before the run "
+                             f"(this one has {solver.mesh.levels} levels): start from adapt.private_scene(scene), "
+                             "which works on a copy of the mesh")
+        p = solver.order
+        aux = ngs.VectorH1(solver.mesh, order=p, hoprolongation=p >= 2)
+        solver._adapt_carrier = aux
+    return aux
+
+
+def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, list]:
+    """Refine the marked elements of the solver's mesh and carry the solver's state over.
+
+    The solver's fields (u, alpha, committed alpha and history) are transferred in place (see the
+    module docstring); ``states``: further states of :meth:`~ngtmc.solver.Solver.get_state` (for
+    example the one before the step) to transfer, returned as new dicts in the same order.
+    Returns (record, transferred states)."""
+    mesh = solver.mesh
+    ne_old = mesh.ne
+    dofs_old = solver.fes_u.ndof
+    marked = np.asarray(marked, dtype=bool)
+    if marked.shape != (ne_old,):
+        raise ValueError(f"marked has shape {marked.shape}; the mesh has {ne_old} elements")
+    scene = solver.scene
+    per_element_density = scene.density is not None and not isinstance(scene.density, Mapping)
+    rho_old = solver.rho.vec.FV().NumPy().copy()
+    curve = mesh.GetCurveOrder()
+
+    aux = _carrier_space(solver)
+    tmp_u = ngs.GridFunction(solver.fes_u)
+
+    def carry_u(values):
+        tmp_u.vec.FV().NumPy()[:] = values
+        g = ngs.GridFunction(aux)
+        g.Set(tmp_u)
+        return g
+
+    u_carriers = [carry_u(solver.u.vec.FV().NumPy())] + [carry_u(st["u"]) for st in states]
+    del tmp_u
+    a_carriers = []
+    if solver.alpha is not None:
+        def carry_a(values):
+            g = ngs.GridFunction(solver.fes_a)
+            g.vec.FV().NumPy()[:] = values
+            return g
+        a_carriers = [carry_a(solver.alpha_committed)]
+        for st in states:
+            a_carriers += [carry_a(st["alpha"]), carry_a(st["alpha_committed"])]
+    H_old = [solver.H_committed] + [st["H"] for st in states]
+
+    for el in mesh.Elements(ngs.VOL):
+        mesh.SetRefinementFlag(el, bool(marked[el.nr]))
+    mesh.Refine()
+    if curve > 1:
+        mesh.Curve(curve)
+    anc = _ancestors(mesh, ne_old)
+    if per_element_density:
+        scene.density = rho_old[anc]
+    solver.mesh_changed()
+
+    npts = solver.irs.ndof // mesh.ne
+    new_H = [transfer_history(h, anc, ne_old, npts) for h in H_old]
+
+    def back_u(g):
+        t = ngs.GridFunction(solver.fes_u)
+        t.Set(g)
+        return t.vec.FV().NumPy().copy()
+
+    new_u = [back_u(g) for g in u_carriers]
+    solver.u.vec.FV().NumPy()[:] = new_u[0]
+    solver.H_committed = new_H[0]
+    solver.H.vec.FV().NumPy()[:] = new_H[0]
+    out = []
+    if solver.alpha is not None:
+        solver.alpha_committed = a_carriers[0].vec.FV().NumPy().copy()
+    for k, st in enumerate(states):
+        new = {"u": new_u[k + 1], "H": new_H[k + 1], "load": np.array(st["load"])}
+        if solver.alpha is not None:
+            new["alpha"] = a_carriers[1 + 2 * k].vec.FV().NumPy().copy()
+            new["alpha_committed"] = a_carriers[2 + 2 * k].vec.FV().NumPy().copy()
+        out.append(new)
+    record = RefinementRecord(int(marked.sum()), ne_old, mesh.ne, dofs_old, solver.fes_u.ndof)
+    return record, out

@@ -1,0 +1,297 @@
+"""Adaptive refinement during a run (ngtmc.adapt): the transfer to the refined mesh loses nothing
+(H and alpha never decrease), reproduces a homogeneous state exactly and an order-2 field
+exactly, carries the density and the curved geometry over, the re-solved step converges and agrees
+with a mesh refined beforehand, and the adjoint refuses a run whose mesh changed."""
+import dataclasses
+import os
+
+import numpy as np
+import ngsolve as ngs
+import pytest
+from netgen.occ import Circle, OCCGeometry, Rectangle
+
+import ngtmc
+from ngtmc import adapt
+from ngtmc.adapt import Adaptivity
+from ngtmc.discretisation import bilinear_form
+from scenes import notched_plate, tension_bar, two_blocks
+
+
+def _copy_mesh(mesh):
+    return ngs.Mesh(mesh.ngmesh.Copy())
+
+
+def _points(solver):
+    """Coordinates (x, y) of the history points, mm."""
+    g = ngs.GridFunction(solver.irs)
+    out = []
+    for c in (ngs.x, ngs.y):
+        g.Interpolate(c)
+        out.append(g.vec.FV().NumPy().copy())
+    return np.array(out).T
+
+
+def _damaged_notched_plate():
+    """Coarse notched plate after a few single-pass steps: alpha and H vary from point to point."""
+    scene = notched_plate(maxh=0.2, h_band=0.05, l0=0.1)
+    s = ngtmc.Solver(scene, compile=True)
+    for load in (0.004, 0.006, 0.007):
+        s.solve_phase_field()
+        assert s.solve_displacement(load).converged
+        s.update_history()
+    return s
+
+
+def test_history_and_alpha_never_decrease_across_refinement():
+    s = _damaged_notched_plate()
+    assert np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
+    old_mesh = _copy_mesh(s.mesh)
+    ne_old = s.mesh.ne
+    old_pts = _points(s)
+    H_old = s.H_committed.copy().reshape(ne_old, -1)
+    fes_a_old = ngs.H1(old_mesh, order=1, definedon=old_mesh.Materials(s._frac_re))
+    a_old = ngs.GridFunction(fes_a_old)
+    a_old.vec.FV().NumPy()[:] = s.alpha_committed
+    marked = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.02))
+    assert 0 < marked.sum() < ne_old
+    adapt.refine(s, marked)
+    assert s.mesh.ne > ne_old
+    # H: at every new point, at least the old value at every point of the old element holding the
+    # new element (located by the new element's centroid: the history points of order 1 lie on
+    # the element edges, where locating the point itself picks either neighbour)
+    pts = _points(s)
+    H_new = s.H_committed.reshape(s.mesh.ne, -1)
+    coords = np.asarray(s.mesh.ngmesh.Coordinates())
+    centroid = np.array([coords[[v.nr for v in el.vertices], :2].mean(axis=0) for el in s.mesh.Elements(ngs.VOL)])
+    owner = np.array([old_mesh(*c).nr for c in centroid])
+    assert np.all(owner >= 0)
+    assert np.all(H_new >= H_old[owner].max(axis=1, keepdims=True) * (1 - 1e-15))
+    assert np.all(H_new > 0)
+    # elements that were not refined keep their points and values exactly
+    same = np.all(np.isclose(pts.reshape(s.mesh.ne, -1, 2)[:ne_old], old_pts.reshape(ne_old, -1, 2), rtol=0,
+                             atol=1e-14), axis=(1, 2))
+    assert same.sum() > 0
+    np.testing.assert_array_equal(H_new[:ne_old][same], H_old[same])
+    # alpha (P1): at every new vertex, the old field evaluated there (exactly, so never lower)
+    for v in range(s.mesh.nv):
+        dofs = s.fes_a.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))
+        if not dofs or dofs[0] < 0:
+            continue
+        old = a_old(old_mesh(*coords[v, :2]))
+        assert s.alpha_committed[dofs[0]] >= old - 1e-14
+        assert s.alpha_committed[dofs[0]] == pytest.approx(old, abs=1e-14)
+
+
+def test_homogeneous_state_is_reproduced_exactly():
+    for order in (1, 2):
+        s = ngtmc.Solver(tension_bar(maxh=0.1, l0=0.1, order=order), compile=True)
+        assert s.solve_displacement(2e-3).converged
+        s.update_history()
+        e0, f0, H0 = s.energies(), s.reaction(), s.H_committed.copy()
+        assert np.ptp(H0) < 1e-12 * H0.max()
+        rng = np.random.default_rng(order)
+        for _ in range(2):
+            adapt.refine(s, rng.random(s.mesh.ne) < 0.3)
+        e1, f1 = s.energies(), s.reaction()
+        for k in e0:
+            assert e1[k] == pytest.approx(e0[k], rel=1e-12, abs=1e-300)
+        assert f1 == pytest.approx(f0, rel=1e-12)
+        np.testing.assert_allclose(s.H_committed, H0[0], rtol=1e-14)
+        res = s.solve_displacement(2e-3)  # still the equilibrium: no iteration needed
+        assert res.converged and res.iterations == 0
+
+
+def test_order_two_field_is_transferred_exactly_where_prolongation_is_not():
+    """Variable order (order 2 in the void only): NGSolve's prolongation loses the quadratic part
+    of u (the trap); the transfer of ngtmc.adapt keeps it exactly, and with it the energies."""
+    scene = two_blocks(maxh=0.2, void_maxh=0.05)
+    s = ngtmc.Solver(scene, compile=True)
+    y = ngs.y
+    f = ngs.IfPos(y - 0.45, 0.0025, ngs.IfPos(y - 0.4, (y - 0.4) ** 2, 0.0))
+    field = ngs.CF((0.3 * f, -f))
+    s.u.Set(field)
+    err = lambda g: ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), s.mesh))
+    assert err(s.u) < 1e-12
+    e0 = s.energies()
+    # the trap: a plain prolongation of the same variable-order field is not exact
+    mesh2 = _copy_mesh(scene.mesh)
+    fes2 = ngs.VectorH1(mesh2, order=2)
+    from ngtmc.discretisation import lower_order_outside
+    lower_order_outside(fes2, mesh2, "void")
+    g2 = ngs.GridFunction(fes2)
+    g2.vec.FV().NumPy()[:] = s.u.vec.FV().NumPy()
+    for el in mesh2.Elements(ngs.VOL):
+        mesh2.SetRefinementFlag(el, el.mat == "void")
+    mesh2.Refine()
+    assert ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g2 - field, g2 - field), mesh2)) > 1e-6
+    # the transfer of ngtmc.adapt
+    marked = np.array([el.mat == "void" for el in s.mesh.Elements(ngs.VOL)])
+    adapt.refine(s, marked)
+    assert err(s.u) < 1e-12
+    e1 = s.energies()
+    # the regulariser is quadratic in u and integrated exactly: the same field, the same energy;
+    # the elastic energy is not polynomial, so the children's quadrature changes it slightly
+    assert e0["regularisation_energy"] > 0
+    assert e1["regularisation_energy"] == pytest.approx(e0["regularisation_energy"], rel=1e-10)
+    assert e1["elastic_energy"] == pytest.approx(e0["elastic_energy"], rel=1e-5)
+
+
+def test_density_per_element_follows_its_parent_and_regions_keep_their_names():
+    base = tension_bar(maxh=0.1, fracture=False)
+    rng = np.random.default_rng(3)
+    rho = rng.uniform(0.2, 1.0, base.mesh.ne)
+    scene = adapt.private_scene(dataclasses.replace(base, density=rho))
+    s = ngtmc.Solver(scene, compile=True)
+    old_mesh = _copy_mesh(s.mesh)
+    adapt.refine(s, rng.random(s.mesh.ne) < 0.4)
+    assert base.mesh.ne == rho.size  # the scene passed to private_scene keeps its mesh
+    coords = np.asarray(s.mesh.ngmesh.Coordinates())
+    new_rho = s.rho.vec.FV().NumPy()
+    for el in s.mesh.Elements(ngs.VOL):
+        c = coords[[v.nr for v in el.vertices], :2].mean(axis=0)
+        assert new_rho[el.nr] == rho[old_mesh(*c).nr]
+        assert el.mat == "bar"
+    np.testing.assert_array_equal(s.scene.element_density(), new_rho)
+
+
+def test_curved_geometry_stays_curved():
+    disk = Circle((0, 0), 1.0).Face()
+    disk.faces.name = "disk"
+    disk.edges.name = "rim"
+    mesh = ngs.Mesh(OCCGeometry(disk, dim=2).GenerateMesh(maxh=0.5))
+    mesh.Curve(2)
+    scene = adapt.private_scene(ngtmc.Scene(mesh, {"disk": ngtmc.Material(1000.0, 0.3)},
+                                            supports=[ngtmc.Support("rim", x=True)],
+                                            load=ngtmc.DisplacementLoad("rim", "y")))
+    s = ngtmc.Solver(scene, compile=True)
+    for _ in range(3):
+        adapt.refine(s, np.ones(s.mesh.ne, dtype=bool))
+    assert s.mesh.GetCurveOrder() == 2
+    area = ngs.Integrate(1.0, s.mesh)
+    assert abs(area - np.pi) < 1e-5       # the new boundary vertices lie on the circle, edges curved
+    flat = ngs.Mesh(s.mesh.ngmesh.Copy())  # the same vertices with straight edges
+    assert abs(ngs.Integrate(1.0, flat) - np.pi) > 1e-3
+
+
+def _run(scene, adapt_option=None, loads=(0.002, 0.004, 0.005, 0.0055)):
+    sched = ngtmc.Schedule([0.0, loads[-1]])
+    sim = ngtmc.Simulation(scene, sched, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=0.0, du_min=1e-8),
+                           compile=True, adapt=adapt_option)
+    return sim, sim.run()
+
+
+def test_refined_resolve_converges_and_agrees_with_a_mesh_refined_beforehand():
+    scene = notched_plate(maxh=0.2, h_band=0.2, l0=0.1)
+    option = Adaptivity(h_crack=0.05, alpha_threshold=0.01, history_fraction=0.1)
+    sim, res = _run(scene, option)
+    h = res.history
+    assert sim.refinements and h["dofs"].iloc[-1] > h["dofs"].iloc[0] and h["elements"].iloc[-1] > h["elements"].iloc[0]
+    assert list(h.columns[-2:]) == ["dofs", "elements"] and sim.units["dofs"] == "-"
+    assert scene.mesh.ne == h["elements"].iloc[0]  # the scene's own mesh is not refined
+    assert np.all(np.isfinite(h["force"]))
+    # every accepted state, also after a refinement, is an equilibrium of the final mesh's problem
+    s = res.solver
+    assert s.solve_displacement(s.load).iterations == 0
+    # the same loads on the final mesh from the start
+    final = res.solver.scene
+    _, ref = _run(dataclasses.replace(final, mesh=_copy_mesh(final.mesh), _checked=False))
+    step_refined = max(step for step, _ in sim.refinements)
+    f_amr = h["force"].to_numpy()[step_refined:]
+    f_ref = ref.history["force"].to_numpy()[step_refined:]
+    np.testing.assert_allclose(h["load"].to_numpy(), ref.history["load"].to_numpy(), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(f_amr, f_ref, rtol=2e-2)
+
+
+def test_adjoint_refuses_a_run_whose_mesh_changed():
+    from ngtmc import sensitivities
+    scene = tension_bar(maxh=0.1, l0=0.1)
+    with pytest.raises(ValueError, match="final mesh"):
+        sensitivities.record_path(scene, 1e-3, adapt=Adaptivity(h_crack=0.05))
+    path = sensitivities.record_path(scene, ngtmc.Schedule([0.0, 1e-3]),
+                                     ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=0.0, du_min=1e-8))
+    adapt.refine(path.solver, np.ones(path.solver.mesh.ne, dtype=bool))
+    with pytest.raises(ValueError, match="record the path on the final mesh"):
+        sensitivities.gradient(path, sensitivities.ExternalWork(), wrt=("E",))
+
+
+def _rss_mb():
+    with open(f"/proc/{os.getpid()}/statm") as fh:
+        return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="needs /proc")
+def test_forms_keep_one_matrix_through_refinements():
+    """The NGSolve trap: a BilinearForm keeps the matrix of every mesh level (for multigrid), so a
+    run that refines many times grows without bound; bilinear_form() keeps the finest only."""
+    face = Rectangle(1.0, 0.2).Face()
+    growth = {}
+    for kind in ("default", "ngtmc"):
+        mesh = ngs.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=0.01))
+        fes = ngs.VectorH1(mesh, order=2)
+        u = fes.TrialFunction()
+        a = ngs.BilinearForm(fes, symmetric=True) if kind == "default" else bilinear_form(fes, symmetric=True)
+        a += ngs.InnerProduct(ngs.Grad(u), ngs.Grad(fes.TestFunction())) * ngs.dx
+        a.Assemble()
+        before = _rss_mb()
+        for _ in range(6):
+            for el in mesh.Elements(ngs.VOL):
+                mesh.SetRefinementFlag(el, el.nr == 0)
+            mesh.Refine()
+            a.Assemble()
+        growth[kind] = _rss_mb() - before
+        del a, fes, mesh
+    assert growth["default"] > 10.0
+    assert growth["ngtmc"] < 0.3 * growth["default"]
+
+
+def test_exact_prolongation_needs_a_space_made_on_the_first_level():
+    """The NGSolve trap behind adapt._carrier_space: a space with hoprolongation=True prolongates an
+    order-2 field exactly only if it was made before the mesh's first refinement."""
+    face = Rectangle(1.0, 1.0).Face()
+    field = ngs.CF((ngs.x * ngs.y + ngs.x ** 2, ngs.y ** 2 - ngs.x * ngs.y))
+
+    def refine(mesh, k):
+        for el in mesh.Elements(ngs.VOL):
+            mesh.SetRefinementFlag(el, el.nr % k == 0)
+        mesh.Refine()
+
+    errors = {}
+    for made in ("first level", "after a refinement"):
+        mesh = ngs.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=0.3))
+        if made == "first level":
+            fes = ngs.VectorH1(mesh, order=2, hoprolongation=True)
+        refine(mesh, 3)
+        if made != "first level":
+            fes = ngs.VectorH1(mesh, order=2, hoprolongation=True)
+        g = ngs.GridFunction(fes)
+        g.Set(field)
+        refine(mesh, 4)
+        errors[made] = ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), mesh))
+    assert errors["first level"] < 1e-12
+    assert errors["after a refinement"] > 1e-3
+
+
+def test_squeezed_void_is_refined_by_the_J_indicator():
+    """Two blocks pressed together through a void layer: once J < J_threshold in the void, the void
+    is refined to h_void and the step is solved again there; nothing may break in this scene."""
+    scene = two_blocks(maxh=0.2, void_maxh=0.05)
+    option = Adaptivity(h_crack=1.0, h_void=0.0125, J_threshold=0.5)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.03]),
+                           ngtmc.AdaptiveStepControl(du_max=0.01, k_u=0.0, du_min=1e-8), compile=True, adapt=option)
+    h = sim.run().history
+    assert h["min_J"].iloc[-1] < 0.5 and h["elements"].iloc[-1] > 5 * h["elements"].iloc[0]
+    assert h["elements"].iloc[2] == h["elements"].iloc[0]  # J > 0.5 before: nothing refined
+    s = sim.solver
+    void = np.array([el.mat == "void" for el in s.mesh.Elements(ngs.VOL)])
+    assert s.h[void].max() <= 0.0125 * (1 + 1e-9)
+
+
+def test_monolithic_scheme_runs_with_refinement():
+    scene = notched_plate(maxh=0.2, h_band=0.2, l0=0.1)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.002]),
+                           ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=0.0, du_min=1e-8), compile=True,
+                           scheme="monolithic", adapt=Adaptivity(h_crack=0.05, alpha_threshold=0.01))
+    h = sim.run().history
+    assert sim.refinements and h["dofs"].iloc[-1] > h["dofs"].iloc[0]
+    assert sim.coupled.s is sim.solver and sim.coupled.nu == sim.solver.fes_u.ndof
+    assert np.all(np.isfinite(h["force"]))
