@@ -12,8 +12,10 @@ fracture (AT-2, hybrid) happen in one variational model and one load history:
    bends, and the curve follows the published one shifted by the gap;
 3. a crack runs from the notch tip to the top: the force peaks and drops suddenly.
 
-The adaptive displacement control (Eq. 20, ``k_u = 1000`` per N of fracture energy increment)
-shrinks the steps while the crack runs, without knowing in advance when that happens.
+The paper's adaptive displacement control (Eq. 20, ``k_u = 1000`` per N of fracture energy
+increment) shrinks the steps while the crack runs, without knowing in advance when that happens;
+this study's default scheme instead follows the crack by dissipation control (below), which
+needs neither the small steps nor Eq. 20 and has no lag.
 
 Geometry (mm; the paper's Fig. 7 is not available, sizes it does not give are our choices)
 ------------------------------------------------------------------------------------------
@@ -103,22 +105,20 @@ and every step converged (``--set scheme=staggered``, passes until alpha changes
 single-pass, and the force in the tail is 5-28 % lower (9.52 against 12.20 N/mm at 0.100 mm).
 The converged run costs 4.3x the Newton iterations (7159 against 1680).
 
-**Path following gives the converged curve for less work than the lagged one.**
-``--set scheme=path-following`` (the monolithic Newton with dissipation control while the crack
-grows, :mod:`ngtmc.path`) at quick: 194 steps, 796 Newton iterations, 206 s of load steps (one
-thread, another job on the other core), peak 37.42 N/mm at 0.0950 mm, equal to the converged
-staggered peak to 0.06 %. The crack run takes 17 steps, the load falling back from 0.0950 to
-0.0914 mm along the snap-back. At the paper's resolution the same scheme gives the first
-converged peak, 36.45 N/mm at 0.0941 mm (-13.2 % from Ambati, 3.2 % below the lagged single-pass
-peak of the same mesh); that run was stopped in its crack run (256 steps, 1034 Newton
-iterations, 2234 s on a shared machine, at 21 N/mm, its dissipation steps being cut back).
-2026-11-25: the stall is a near-singular mode of the squeezed void (a void vertex of the layer
-under the indenter, which the Hessian regulariser does not resist); with the coupled Newton's
-fallbacks and displacement steps bounded by 1/50 of the load path, the quick curve takes 85
-steps and 529 iterations (peak 37.429 N/mm), and the paper curve was completed once, with one
-manual reset of the step scale (168 steps, 1261 iterations, 1881 s, peak 36.41 N/mm at
-0.0942 mm); not yet unattended. The default stays single-pass until the paper-resolution run of
-path following completes unattended; ``docs/performance.md`` has the comparison.
+**Path following gives the converged curve for less work than the lagged one; it is this
+study's default scheme** (``scheme`` = ``path-following``: the monolithic Newton with dissipation
+control while the crack grows, :mod:`ngtmc.path`; ``--set scheme=single-pass`` runs the paper's).
+Quick: 83 steps, 534 Newton iterations, 4 cut-backs (195.5 s on a shared machine, one thread),
+peak 37.429 N/mm at 0.0948 mm, the converged staggered peak (37.448) to 0.05 %, against 740
+steps, 1680 iterations and 38.763 N/mm (+3.5 %, the lag) single-pass. Paper resolution,
+unattended (2026-11-25, one thread beside two other jobs): 151 steps, 1230 iterations,
+22 cut-backs, 2073 s; **peak 36.421 N/mm at 0.0942 mm, 13.3 % below Ambati's 42 N/mm** and 3.3 %
+below the lagged single-pass peak of the same mesh (37.65 N/mm); 1.99 N/mm at 0.15 mm. The crack
+run (peak to 5 N/mm) is 91 of the steps and 811 of the iterations. With ``ngtmc run three-point-bending -r paper`` (two
+threads, otherwise idle machine): 148 steps, 1248 iterations, the same peak, 1130 s of load steps
+and 1182 s in all (the issue's target is 15 min).
+``docs/performance.md`` has the history of these numbers (the near-singular mode of the squeezed
+void that stalled the first paper runs, the fallbacks of the coupled Newton, the step rules).
 
 Fidelity: variants of one set-up (issue 15; ``docs/fidelity.md`` has the details)
 ---------------------------------------------------------------------------------
@@ -290,6 +290,14 @@ SNAPSHOT_LOADS = [0.05, 0.08, 0.09, 0.1, 0.11, 0.13, 0.15]
 
 #: Measured at each resolution (see the docstring; one NGSolve thread, the other core busy).
 MEASURED = {
+    # the default scheme, path following (2026-11-25; one thread, other jobs on the machine)
+    "quick_path_following": {"n_elements": 8632, "ndof_u": 14372, "peak_force": 37.429, "peak_load": 0.09480,
+                             "steps": 83, "newton_iterations": 534, "cutbacks": 4, "wall_time_s": 195.5,
+                             "final_force": 2.326, "status": "completed"},
+    "paper_path_following": {"n_elements": 29808, "ndof_u": 52024, "ndof_alpha": 15127, "peak_force": 36.421,
+                             "peak_load": 0.09425, "steps": 151, "newton_iterations": 1230, "cutbacks": 22,
+                             "wall_time_s": 2073, "threads": 1, "final_force": 1.985, "status": "completed"},
+    # the paper's single-pass scheme (the default before 2026-11-25)
     "quick": {"n_elements": 8632, "ndof_u": 14372, "peak_force": 38.763, "peak_load": 0.09686, "steps": 740,
               "newton_iterations": 1680, "wall_time_s": 386, "final_force": 2.506, "status": "completed"},
     "quick_order2_everywhere": {"n_elements": 8632, "ndof_u": 35026, "peak_force": 38.142, "peak_load": 0.09788,
