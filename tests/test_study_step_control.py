@@ -29,8 +29,11 @@ def test_cases_and_physics_shared_with_three_point_bending():
     assert sc.reference_case(p) == "ku1000_du4e-03"
     # same physics as three_point_bending: every physical parameter but k_u is shared, same values
     for k, v in tpb.PARAMETERS.items():
-        if k != "k_u":
+        if k not in ("k_u", "scheme"):
             assert sc.PARAMETERS[k] == v, k
+    # but the scheme whose steps Eq. 20 sets, the paper's, not the three-point bending's default
+    assert sc.PARAMETERS["scheme"][0] == "single-pass" != tpb.PARAMETERS["scheme"][0]
+    assert {c.options["scheme"] for c in sc.cases(p)} == {"single-pass"}
     # overrides reach the cases
     _, p2 = study_parameters(sc, "quick", {"k_u_values": "0,50", "du_max_fine": "1e-3"})
     assert {(c.control.k_u, c.control.du_max) for c in sc.cases(p2)} == {(0.0, 4e-3), (50.0, 4e-3), (0.0, 1e-3),
