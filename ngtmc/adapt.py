@@ -53,7 +53,7 @@ import re
 import numpy as np
 import ngsolve as ngs
 
-from .materials import check_number, deformation_gradient
+from .materials import check_number
 
 __all__ = ["Adaptivity", "mark", "refine", "RefinementRecord", "private_scene", "transfer_history"]
 
@@ -188,8 +188,7 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None) -> np.ndarray:
         flags |= crack
         target[frac] = adapt.h_crack
     if adapt.h_void is not None and void.any():
-        solver._scratch_guard.Interpolate(ngs.Det(deformation_gradient(solver.u)))
-        J = _per_element(solver._scratch_guard.vec.FV().NumPy(), ne)
+        J = _per_element(solver.J_values(), ne)
         flags |= (J < adapt.J_threshold).any(axis=1) & void
         target[void & ~frac] = adapt.h_void
     for _ in range(int(adapt.buffer)):

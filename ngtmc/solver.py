@@ -401,10 +401,15 @@ class Solver:
         dens = fracture.fracture_energy_density(self.alpha, self.Gc, self.l0)
         return float(ngs.Integrate(dens, self.mesh, definedon=self.mesh.Materials(self._frac_re), order=2))
 
-    def min_J(self) -> float:
-        """Smallest det F at the history quadrature points, dimensionless."""
+    def J_values(self) -> np.ndarray:
+        """det F at the guard quadrature points (dimensionless), element by element; a view of a
+        scratch vector that the next call overwrites."""
         self._scratch_guard.Interpolate(ngs.Det(deformation_gradient(self.u)))
-        return float(self._scratch_guard.vec.FV().NumPy().min())
+        return self._scratch_guard.vec.FV().NumPy()
+
+    def min_J(self) -> float:
+        """Smallest det F at the guard quadrature points, dimensionless."""
+        return float(self.J_values().min())
 
     def max_alpha(self) -> float:
         return float(self.alpha.vec.FV().NumPy().max()) if self.alpha is not None else 0.0

@@ -398,10 +398,10 @@ def make_case(p: dict, name: str = "main", label: str | None = None, k_u: float 
 
 def cases(p: dict) -> list[Case]:
     stop = min(float(p.get("stop_load", p["final_load"])), float(p["final_load"]))
-    if p.get("scheme") == "path-following":  # steps by dissipation: neither k_u nor du_max sets them
+    if p["scheme"] == "path-following":  # steps by dissipation: neither k_u nor du_max sets them
         label = "this model (path following)"
     else:
-        label = f"this model ({p.get('scheme', 'single-pass')}, k_u = {float(p['k_u']):g}, du_max = {float(p['du_max']):g} mm)"
+        label = f"this model ({p['scheme']}, k_u = {float(p['k_u']):g}, du_max = {float(p['du_max']):g} mm)"
     return [make_case(p, "main", label=label, final_load=stop)]
 
 
