@@ -45,38 +45,40 @@ class CoupledLinearSolver:
         self.gmres_maxsteps = int(gmres_maxsteps)
         self.gmres_iterations: list[int] = []
         self._inv_u = None
+        self._diag = None  # (positions in the matrix values, rows) of the diagonal entries
+
+    def _diagonal(self):
+        """Positions of the diagonal entries in the values of ``form.mat`` and their rows (from
+        the matrix graph, found again when its size changes)."""
+        vals = self.form.mat.AsVector().FV().NumPy()
+        if self._diag is None or self._diag[2] != vals.size:
+            _, cols, rowptr = self.form.mat.CSR()
+            cols = np.asarray(cols).astype(np.int64)
+            rowptr = np.asarray(rowptr).astype(np.int64)
+            rows = np.repeat(np.arange(rowptr.size - 1), np.diff(rowptr))
+            on = cols == rows
+            self._diag = (np.nonzero(on)[0], rows[on], vals.size)
+        return vals, self._diag[0], self._diag[1]
 
     def shifted(self, free: np.ndarray, mu: float):
         """UMFPACK factorization of the tangent with its diagonal on the ``free`` dofs scaled by
         (1 + mu) (Levenberg); the assembled matrix is restored. Returns solve(rhs, out)."""
         A = self.form.mat
-        vals = A.AsVector().FV().NumPy()
-        if getattr(self, "_diag_pos_n", None) != vals.size:
-            _, cols, rowptr = A.CSR()
-            cols = np.asarray(cols).astype(np.int64)
-            rowptr = np.asarray(rowptr).astype(np.int64)
-            rows = np.repeat(np.arange(rowptr.size - 1), np.diff(rowptr))
-            on = cols == rows
-            self._diag_pos = np.nonzero(on)[0]
-            self._diag_row = rows[on]
-            self._diag_pos_n = vals.size
-        pos, row = self._diag_pos, self._diag_row
+        vals, pos, row = self._diagonal()
         keep = vals[pos].copy()
         vals[pos] = keep + np.where(free[row], mu * np.abs(keep), 0.0)
         try:
             inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
         finally:
             vals[pos] = keep
-
-        def solve(rhs, out):
-            out.data = inv * rhs
-        return solve
+        return _applying(inv)
 
     def diagonal_scale(self) -> np.ndarray:
         """1 / diagonal of the assembled tangent's alpha-alpha block (per unit of R_alpha)."""
-        import scipy.sparse as sp
-        A = self.form.mat
-        d = sp.csr_matrix(A.CSR(), shape=(A.height, A.width)).diagonal()[self.nu:]
+        vals, pos, row = self._diagonal()
+        d = np.zeros(self.form.mat.height)
+        d[row] = vals[pos]
+        d = d[self.nu:]
         d = np.where(d > 0, d, np.nan)
         floor = 1e-12 * np.nanmax(d) if np.any(np.isfinite(d)) else 1.0
         return 1.0 / np.where(np.isfinite(d), np.maximum(d, floor), floor)
@@ -86,11 +88,7 @@ class CoupledLinearSolver:
         rhs on the free dofs (any number of right-hand sides with one factorization)."""
         if self.linear_solver == "block-gmres":
             return self._block_solver(free)
-        inv = self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
-
-        def solve(rhs, out):
-            out.data = inv * rhs
-        return solve
+        return _applying(self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver))
 
     def _block_solver(self, free: np.ndarray):
         """GMRES with the block lower-triangular preconditioner [K_uu 0; K_au K_aa], with sparse
@@ -130,6 +128,13 @@ class CoupledLinearSolver:
                 sol.data = direct[0] * rhs
             out.data = sol
         return solve
+
+
+def _applying(inv):
+    """solve(rhs, out), out = inv rhs, of a factorization ``inv``."""
+    def solve(rhs, out):
+        out.data = inv * rhs
+    return solve
 
 
 class _SquareOperator(ngs.BaseMatrix):
