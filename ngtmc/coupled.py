@@ -37,7 +37,7 @@ import ngsolve as ngs
 from . import fracture
 from .materials import deformation_gradient
 from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
-from .solver import NewtonResult
+from .solver import NewtonResult, _QuadraticPlus, merged_terms
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
@@ -73,7 +73,6 @@ LEVENBERG_SHIFTS = (1e-4, 1e-2, 1.0)
 
 #: A Newton step accepted at a step length below WEAK_STEP is compared with Levenberg steps.
 WEAK_STEP = 1.0 / 16
-
 
 class CoupledNewton:
     """Newton on (u, alpha) for a :class:`~ngtmc.solver.Solver` with a phase field.
@@ -138,24 +137,42 @@ class CoupledNewton:
         """The coupled residual form (non-symmetric). The degraded elastic energy enters as a
         Variation on (u, alpha), which gives R_u and the alpha-residual g'(alpha) Psi_d, Psi_d the
         degraded density (Psi_bar in the hybrid formulation, the split's Psi_plus in the
-        anisotropic one); Psi_d is replaced there by H_n(u) (second term), with Psi_plus of the
-        scene's split. So the monolithic scheme follows ``Scene.split`` and ``Scene.formulation``."""
+        anisotropic one); Psi_d is replaced there by H_n(u) (the term at the history points),
+        with Psi_plus of the scene's split. So the monolithic scheme follows ``Scene.split`` and
+        ``Scene.formulation``.
+
+        The terms with a constant tangent, the phase-field operator (Gc/l0 alpha beta + Gc l0
+        grad alpha . grad beta) and the Hessian regulariser (quadratic in u), are assembled once
+        into a constant matrix K that is added to each tangent and whose K x is added to each
+        residual (:class:`~ngtmc.solver._QuadraticPlus`, again only when the density or a material
+        parameter changes). Elastic terms of one region set are one integrand
+        (:func:`~ngtmc.solver.merged_terms`), and the replacement of Psi_d by H_n is one term where
+        both live at the same points. Three-point bending quick, one thread: tangent assembly
+        100 -> 48 ms, residual 22 -> 12 ms (docs/performance.md)."""
         s = self.s
         (u, a), (v, b) = self.X.TnT()
         A = ngs.BilinearForm(self.X, symmetric=False)
-        for name, density, regions in s.energy_terms(u, alpha=a):
-            A += ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
+        K = ngs.BilinearForm(self.X, symmetric=False)
+        for name, density, regions in merged_terms(s.energy_terms(u, alpha=a)):
+            term = ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
+            quadratic = name == "regularisation" and s.scene.regulariser.damping == "none"
+            (K if quadratic else A).__iadd__(term)
         F = deformation_gradient(u)
         pp = s.crack_driving_density(F)
         H_n = ngs.IfPos(pp - s.H, pp, s.H)
         dg = -2.0 * (1.0 - a)  # g'(alpha) of AT-2; the residual stiffness is a constant
         frac = s.mesh.Materials(s._frac_re)
         dxH = ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules())
-        # cancel g'(alpha) Psi_bar b with the elastic terms' own rule, add g'(alpha) H_n b at the history points
-        A += s._maybe_compile(dg * H_n * b) * dxH
-        A += s._maybe_compile(-dg * s.degraded_density(F) * b) * s.energy_measure("elastic_vol", s._frac_re)
-        A += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(definedon=frac)
-        return A
+        # replace g'(alpha) Psi_d b of the elastic terms by g'(alpha) H_n b at the history points
+        if s.elastic_rule_is_history_rule():
+            A += s._maybe_compile(dg * (H_n - s.degraded_density(F)) * b) * dxH
+        else:
+            A += s._maybe_compile(dg * H_n * b) * dxH
+            A += s._maybe_compile(-dg * s.degraded_density(F) * b) * s.energy_measure("elastic_vol", s._frac_re)
+        K += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(definedon=frac)
+        # a zero term on every element gives K the sparsity pattern of the tangent
+        K += ngs.Variation(ngs.Parameter(0.0) * (ngs.InnerProduct(u, u) + a * a) * ngs.dx)
+        return _QuadraticPlus(A, K, s._design_key)
 
     # ------------------------------------------------------------------ state transfer
     def _gather(self):

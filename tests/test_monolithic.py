@@ -15,13 +15,16 @@ from scenes import notched_plate, tension_bar
 #: (split, formulation) pairs the coupled form is checked with: the default and two others
 #: (the monolithic scheme follows Scene.split and Scene.formulation)
 SPLIT_CASES = [("vol-dev-J", "hybrid"), ("vol-dev-small", "hybrid"), ("spectral", "anisotropic")]
+#: ... and at displacement order 2, where the history points are the elastic terms' points and
+#: the coupled form sums the H_n term and the removal of g'(alpha) Psi_d into one integrand
+CASES = [(sp, fo, 1) for sp, fo in SPLIT_CASES] + [("vol-dev-J", "hybrid", 2), ("spectral", "anisotropic", 2)]
 
 
-def _damaged_state(seed=0, split="vol-dev-J", formulation="hybrid"):
+def _damaged_state(seed=0, split="vol-dev-J", formulation="hybrid", order=1):
     """Notched plate (order 1) with a random displacement, a random alpha in [0, 0.6] and a random
     committed history: some history points have Psi_plus above H_{n-1} (the max is active),
     others below."""
-    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1, split=split, formulation=formulation))
+    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1, split=split, formulation=formulation, order=order))
     rng = np.random.default_rng(seed)
     s.u.Set(ngs.CF((2e-3 * ngs.x * ngs.y, 3e-3 * ngs.y + 1e-3 * ngs.x ** 2)))
     s.alpha.vec.FV().NumPy()[:] = rng.uniform(0.0, 0.6, s.fes_a.ndof)
@@ -33,9 +36,9 @@ def _damaged_state(seed=0, split="vol-dev-J", formulation="hybrid"):
     return s, c
 
 
-@pytest.mark.parametrize("split,formulation", SPLIT_CASES)
-def test_coupled_residual_is_the_hybrid_system_with_the_current_history(split, formulation):
-    s, c = _damaged_state(0, split, formulation)
+@pytest.mark.parametrize("split,formulation,order", CASES)
+def test_coupled_residual_is_the_hybrid_system_with_the_current_history(split, formulation, order):
+    s, c = _damaged_state(0, split, formulation, order)
     r = c.x.vec.CreateVector()
     c.form.Apply(c.x.vec, r)
     R = r.FV().NumPy()
@@ -55,11 +58,11 @@ def test_coupled_residual_is_the_hybrid_system_with_the_current_history(split, f
     np.testing.assert_allclose(R[c.nu:], ra_vec.FV().NumPy(), rtol=0, atol=1e-10 * np.abs(ra_vec.FV().NumPy()).max())
 
 
-@pytest.mark.parametrize("split,formulation", SPLIT_CASES)
-def test_coupled_tangent_is_the_derivative_of_the_residual(split, formulation):
+@pytest.mark.parametrize("split,formulation,order", CASES)
+def test_coupled_tangent_is_the_derivative_of_the_residual(split, formulation, order):
     """Central finite differences of the residual along a random direction against the assembled
-    (non-symmetric) tangent."""
-    s, c = _damaged_state(1, split, formulation)
+    (non-symmetric) tangent, constant part (phase-field operator, regulariser) included."""
+    s, c = _damaged_state(1, split, formulation, order)
     x = c.x.vec
     rng = np.random.default_rng(3)
     v = x.CreateVector()
@@ -86,6 +89,21 @@ def test_coupled_tangent_is_the_derivative_of_the_residual(split, formulation):
     Kw.data = c.form.mat * w
     asym = abs(ngs.InnerProduct(Kv, w) - ngs.InnerProduct(v, Kw)) / abs(ngs.InnerProduct(Kv, w))
     assert asym > 1e-6
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_the_history_points_are_the_elastic_points_exactly_when_the_solver_says_so(order):
+    """Solver.elastic_rule_is_history_rule decides whether the coupled form sums its history term
+    and the removal of g'(alpha) Psi_d into one integrand: that is exact only if both rules are
+    the same points, which an integrand no rule integrates exactly tells."""
+    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1, order=order))
+    frac = s.mesh.Materials(s._frac_re)
+    cf = ngs.exp(7 * ngs.x * ngs.y) * ngs.sin(13 * ngs.x + 5 * ngs.y)
+    elastic = ngs.Integrate(cf * s.energy_measure("elastic_vol", s._frac_re), s.mesh)
+    history = ngs.Integrate(cf * ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules()), s.mesh)
+    same = abs(elastic - history) <= 1e-13 * abs(history)
+    assert s.elastic_rule_is_history_rule() == same
+    assert same == (order == 2)
 
 
 def _peak(scheme, du, **kw):
