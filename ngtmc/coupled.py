@@ -37,6 +37,7 @@ import ngsolve as ngs
 from . import fracture
 from .materials import deformation_gradient
 from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
+from .discretisation import rules
 from .solver import NewtonResult, _QuadraticPlus, merged_terms
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
@@ -73,6 +74,33 @@ LEVENBERG_SHIFTS = (1e-4, 1e-2, 1.0)
 
 #: A Newton step accepted at a step length below WEAK_STEP is compared with Levenberg steps.
 WEAK_STEP = 1.0 / 16
+
+def history_pieces(s, u, a, b) -> list:
+    """(CF, measure) pairs that turn the alpha-derivative of the degraded elastic energy,
+    g'(alpha) Psi_d b, into g'(alpha) H_n(u) b with H_n = max(H_{n-1}, Psi_plus(u)) at the history
+    points (Eq. 7 inside the step): one integrand where the elastic terms live at the history
+    points (:meth:`~ngtmc.solver.Solver.elastic_rule_is_history_rule`), else two. ``u``, ``a``:
+    displacement and phase field (trial functions or GridFunctions), ``b`` the phase-field test
+    function or weight; ``s`` the solver (its ``H`` holds H_{n-1}). Integrands in MPa per unit
+    alpha. The one owner of this part of R_alpha: the coupled form and the adjoint
+    (:mod:`ngtmc.sensitivities_coupled`) both use it."""
+    F = deformation_gradient(u)
+    pp = s.crack_driving_density(F)
+    H_n = ngs.IfPos(pp - s.H, pp, s.H)
+    dg = -2.0 * (1.0 - a)  # g'(alpha) of AT-2; the residual stiffness is a constant
+    dxH = ngs.dx(definedon=s.mesh.Materials(s._frac_re), intrules=s.irs.GetIntegrationRules())
+    if s.elastic_rule_is_history_rule():
+        return [(dg * (H_n - s.degraded_density(F)) * b, dxH)]
+    return [(dg * H_n * b, dxH), (-dg * s.degraded_density(F) * b, s.energy_measure("elastic_vol", s._frac_re))]
+
+
+def phase_field_piece(s, a, b) -> tuple:
+    """(CF, measure) of the phase-field operator of R_alpha, Gc (alpha beta / l0 + l0 grad alpha .
+    grad beta) over the fracture regions (Eq. 16), in N/mm^2 per unit alpha; exact for P1 with the
+    rule of order 2."""
+    cf = s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))
+    return cf, ngs.dx(definedon=s.mesh.Materials(s._frac_re), intrules=rules(s.mesh, 2))
+
 
 class CoupledNewton:
     """Newton on (u, alpha) for a :class:`~ngtmc.solver.Solver` with a phase field.
@@ -150,26 +178,19 @@ class CoupledNewton:
         both live at the same points. Three-point bending quick, one thread: tangent assembly
         100 -> 48 ms, residual 22 -> 12 ms (docs/performance.md)."""
         s = self.s
-        (u, a), (v, b) = self.X.TnT()
+        (u, a), (_, b) = self.X.TnT()
         A = ngs.BilinearForm(self.X, symmetric=False)
         K = ngs.BilinearForm(self.X, symmetric=False)
         for name, density, regions in merged_terms(s.energy_terms(u, alpha=a)):
             term = ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
-            quadratic = name == "regularisation" and s.scene.regulariser.damping == "none"
-            (K if quadratic else A).__iadd__(term)
-        F = deformation_gradient(u)
-        pp = s.crack_driving_density(F)
-        H_n = ngs.IfPos(pp - s.H, pp, s.H)
-        dg = -2.0 * (1.0 - a)  # g'(alpha) of AT-2; the residual stiffness is a constant
-        frac = s.mesh.Materials(s._frac_re)
-        dxH = ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules())
-        # replace g'(alpha) Psi_d b of the elastic terms by g'(alpha) H_n b at the history points
-        if s.elastic_rule_is_history_rule():
-            A += s._maybe_compile(dg * (H_n - s.degraded_density(F)) * b) * dxH
-        else:
-            A += s._maybe_compile(dg * H_n * b) * dxH
-            A += s._maybe_compile(-dg * s.degraded_density(F) * b) * s.energy_measure("elastic_vol", s._frac_re)
-        K += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(definedon=frac)
+            if name == "regularisation" and s.scene.regulariser.damping == "none":
+                K += term  # quadratic in u: constant tangent
+            else:
+                A += term
+        for cf, measure in history_pieces(s, u, a, b):
+            A += s._maybe_compile(cf) * measure
+        cf, measure = phase_field_piece(s, a, b)
+        K += cf * measure
         # a zero term on every element gives K the sparsity pattern of the tangent
         K += ngs.Variation(ngs.Parameter(0.0) * (ngs.InnerProduct(u, u) + a * a) * ngs.dx)
         return _QuadraticPlus(A, K, s._design_key)

@@ -56,7 +56,7 @@ import numpy as np
 import ngsolve as ngs
 
 from . import sensitivities as _S
-from .materials import deformation_gradient
+from .coupled import history_pieces, phase_field_piece
 from .scene import Scene
 from .simulation import Simulation
 
@@ -228,18 +228,9 @@ def alpha_residual_pieces(s, w):
     of :meth:`ngtmc.coupled.CoupledNewton._build_form` contracted with ``w`` (a phase-field
     GridFunction, or the test function to assemble the rows themselves), at the solver's fields
     u, alpha and H (= H_{n-1} of the step)."""
-    frac = s.mesh.Materials(s._frac_re)
-    F = deformation_gradient(s.u)
-    pieces = []
-    for name, density, regions in s.energy_terms(s.u):
-        pieces.append((density.Diff(s.alpha, w), s.energy_measure(name, regions)))
-    pp = s.crack_driving_density(F)
-    H_n = ngs.IfPos(pp - s.H, pp, s.H)
-    dg = -2.0 * (1.0 - s.alpha)
-    pieces.append((dg * H_n * w, ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules())))
-    pieces.append((-dg * s.degraded_density(F) * w, s.energy_measure("elastic_vol", s._frac_re)))
-    pieces.append((s.Gc / s.l0 * s.alpha * w + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(s.alpha), ngs.Grad(w)),
-                   ngs.dx(definedon=frac, intrules=_S.rules(s.mesh, 2))))
+    pieces = [(density.Diff(s.alpha, w), s.energy_measure(name, regions)) for name, density, regions in s.energy_terms(s.u)]
+    pieces += history_pieces(s, s.u, s.alpha, w)
+    pieces.append(phase_field_piece(s, s.alpha, w))
     return pieces
 
 
