@@ -207,6 +207,7 @@ import numpy as np
 import ngtmc
 from ngtmc.study import SOLVER_PARAMETERS, Case, StudyError, simulation_options
 
+from ngtmc.studies import _tpb_convergence as _convergence
 from ngtmc.studies import _tpb_elastic as _elastic
 from ngtmc.studies import _tpb_geometry as _geometry
 from ngtmc.studies._tpb_elastic import elastic_slope  # noqa: F401 (part of the study's interface)
@@ -435,6 +436,47 @@ def targets(p: dict) -> list[dict]:
 #: is checked against, one record per number (docs/study-interface.md): the quantity of
 #: metadata.json results of a case, the value with its unit, tolerance (rel: relative) and source.
 #: Measured at quick: 38.76 N/mm (-7.7 %) at 0.0969 mm (+0.9 %); see MEASURED.
+def mesh_convergence() -> dict:
+    """Recorded peaks of the default scheme (path following) against h_band, from ``MEASURED``
+    (keys ``<resolution>_path_following``), with their extrapolations to h -> 0
+    (:func:`ngtmc.studies._tpb_convergence.extrapolate`): h (mm), peak (N/mm), resolutions."""
+    rows = [(float(RESOLUTIONS[r]["h_band"]), float(MEASURED[f"{r}_path_following"]["peak_force"]), r)
+            for r in ("quick", "medium", "paper") if f"{r}_path_following" in MEASURED]
+    h, F, names = (list(v) for v in zip(*rows))
+    return {"h": h, "peak_force": F, "resolutions": names, **_convergence.extrapolate(h, F)}
+
+
+def figures(p: dict) -> list[dict]:
+    """The report's figure of the mesh convergence of the peak (recorded numbers, not this run)."""
+    mc = mesh_convergence()
+    h_max = max(mc["h"]) * 1.1
+    xs = np.linspace(0.0, h_max, 23)
+    series = [
+        {"label": "this model, path following (recorded: " + ", ".join(mc["resolutions"]) + ")", "kind": "points",
+         "x": mc["h"], "y": mc["peak_force"]},
+        {"label": f"linear in h: {mc['linear']:.2f} N/mm at h = 0", "kind": "curve", "x": xs.tolist(),
+         "y": (mc["linear"] + mc["linear_slope"] * xs).tolist()},
+    ]
+    if mc["richardson"] is not None:
+        q, F0 = mc["order"], mc["richardson"]
+        i = int(np.argmin(mc["h"]))
+        C = (mc["peak_force"][i] - F0) / mc["h"][i] ** q
+        series.append({"label": f"F0 + C h^q, observed order q = {q:.2f}: {F0:.2f} N/mm at h = 0", "kind": "curve",
+                       "x": xs.tolist(), "y": (F0 + C * xs ** q).tolist()})
+    series.append({"label": "Ambati et al. 2015, Fig. 22: 42 N/mm (their mesh)", "kind": "curve",
+                   "x": [0.0, h_max], "y": [42.0, 42.0]})
+    return [{
+        "title": "Peak force against the element size of the band (recorded, default scheme)",
+        "x_title": "h_band (mm; l0 = 0.015 mm)", "y_title": "peak force (N/mm)",
+        "caption": ("Peaks of the path-following runs recorded in the study (MEASURED) at quick, medium and paper "
+                    "resolution, not computed in this run, with two extrapolations to h = 0: a straight line (the "
+                    "AT-2 toughness on a mesh of size h is Gc (1 + h / (2 l0))) and F0 + C h^q with the order "
+                    "observed from the three peaks. Look for: how far the extrapolated peak is from the paper "
+                    "resolution's and from Ambati's 42 N/mm."),
+        "series": series,
+    }]
+
+
 EXPECTED = {
     "peak_force": {"case": "main", "quantity": "peak_force", "value": 42.0, "unit": "N/mm", "rel": 0.15,
                    "source": "Ambati et al. 2015, Fig. 22 (0.042 kN/mm)"},
