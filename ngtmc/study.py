@@ -78,6 +78,9 @@ class Case:
     run: optional ``run(case, out_dir) -> pandas.DataFrame`` for a case that is not an ngtmc
         simulation (e.g. a classical penalty-contact reference); the DataFrame has at least the
         columns ``load`` and ``force``.
+    cost: expected cost relative to the study's other cases (dimensionless, default 1): on a
+        cluster the costliest cases start first, so that the last one to finish is not a long one
+        started late; a serial run keeps the study's order.
     """
 
     name: str
@@ -89,10 +92,14 @@ class Case:
     snapshot_loads: list = field(default_factory=list)
     parameters: dict = field(default_factory=dict)
     run: Callable | None = None
+    cost: float = 1.0
 
     def __post_init__(self):
         if not self.label:
             self.label = self.name
+        if not (isinstance(self.cost, (int, float)) and not isinstance(self.cost, bool) and self.cost > 0
+                and self.cost < float("inf")):
+            raise ValueError(f"case {self.name!r}: cost = {self.cost!r} must be a finite number > 0")
 
     def build_scene(self):
         """The scene, building it if ``scene`` is a callable."""

@@ -135,8 +135,12 @@ def cases(p: dict) -> list:
     out = []
     for du in dus:
         for ku in kus:
-            out.append(tpb.make_case(q, name=case_name(ku, du), label=f"k_u = {ku:g} 1/N, du_max = {du:g} mm",
-                                     k_u=ku, du_max=du, final_load=stop, snapshot_loads=[0.1, stop]))
+            case = tpb.make_case(q, name=case_name(ku, du), label=f"k_u = {ku:g} 1/N, du_max = {du:g} mm",
+                                 k_u=ku, du_max=du, final_load=stop, snapshot_loads=[0.1, stop])
+            # a rough model of the recorded step counts (docstring tables), for the order in which a
+            # cluster starts the cases: steps ~ stop / du_max, k_u = 1000 about ten times more
+            case.cost = stop / du * (1.0 + ku / 100.0)
+            out.append(case)
     return out
 
 

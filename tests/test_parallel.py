@@ -193,3 +193,19 @@ def test_cli_forwards_workers_scheduler_and_threads(tmp_path, monkeypatch):
     assert main(["run", "step-control"]) == 0
     assert seen["workers"] is None and seen["threads"] == "auto"
 
+
+
+def test_costliest_cases_start_first():
+    """On a cluster the cases start in descending Case.cost (the study's order among equal costs);
+    step_control gives its k_u = 1000 cases, the longest of its recorded runs, the highest cost."""
+    from ngtmc.runner.parallel import costliest_first
+    from ngtmc.study import Case, load_study, study_parameters
+    todo = [(0, Case("a")), (1, Case("b", cost=5.0)), (2, Case("c")), (3, Case("d", cost=2.5))]
+    assert [c.name for _, c in costliest_first(todo)] == ["b", "d", "a", "c"]
+    with pytest.raises(ValueError, match="cost"):
+        Case("e", cost=0.0)
+    mod = load_study("step_control")
+    for resolution in ("quick", "medium"):
+        _, p = study_parameters(mod, resolution)
+        order = [c.name for _, c in costliest_first(list(enumerate(mod.cases(p))))]
+        assert all(name.startswith("ku1000") for name in order[:len(order) // 3]), order
