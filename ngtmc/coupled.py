@@ -182,11 +182,11 @@ class CoupledNewton:
         A = ngs.BilinearForm(self.X, symmetric=False)
         K = ngs.BilinearForm(self.X, symmetric=False)
         for name, density, regions in merged_terms(s.energy_terms(u, alpha=a)):
-            term = ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
             if name == "regularisation" and s.scene.regulariser.damping == "none":
-                K += term  # quadratic in u: constant tangent
+                # quadratic in u: constant tangent, assembled once (not worth a compilation)
+                K += ngs.Variation(density * s.energy_measure(name, regions))
             else:
-                A += term
+                A += ngs.Variation(s._maybe_compile(density) * s.energy_measure(name, regions))
         for cf, measure in history_pieces(s, u, a, b):
             A += s._maybe_compile(cf) * measure
         cf, measure = phase_field_piece(s, a, b)
