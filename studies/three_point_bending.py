@@ -118,6 +118,14 @@ run (peak to 5 N/mm) is 91 of the steps and 811 of the iterations. With ``ngtmc 
 threads, otherwise idle machine, 2026-11-25, after the coupled tangent's constant parts were
 assembled once): 153 steps, 1272 iterations, the same peak, 897 s of load steps and 929 s in all
 (15.5 min; 1182 s before that change).
+
+**Mesh convergence of the peak** (path following; the report's study figure, :func:`mesh_convergence`):
+37.429 N/mm at quick (h_band = l0/2), 36.711 at medium (l0/3, 109 steps, 774 iterations, 250 s
+on one thread), 36.421 at paper (l0/4). The three peaks fall monotonically with an observed order
+of 1.60, which extrapolates to **35.93 N/mm at h = 0** (a straight line through them: 35.38); the
+paper resolution is 1.4 % above that limit, and the limit is 14.5 % below Ambati's 42 N/mm. So
+the gap to Ambati does not close with the mesh: it widens (the AT-2 toughness on a mesh of size
+h, Gc (1 + h / (2 l0)), is 12.5 % high at quick and 6 % high at paper).
 ``docs/performance.md`` has the history of these numbers (the near-singular mode of the squeezed
 void that stalled the first paper runs, the fallbacks of the coupled Newton, the step rules).
 
@@ -296,6 +304,9 @@ MEASURED = {
     "quick_path_following": {"n_elements": 8632, "ndof_u": 14372, "peak_force": 37.429, "peak_load": 0.09480,
                              "steps": 83, "newton_iterations": 534, "cutbacks": 4, "wall_time_s": 195.5,
                              "final_force": 2.326, "status": "completed"},
+    "medium_path_following": {"n_elements": 14048, "ndof_u": 22054, "ndof_alpha": 7169, "peak_force": 36.711,
+                              "peak_load": 0.09406, "steps": 109, "newton_iterations": 774, "cutbacks": 8,
+                              "wall_time_s": 250, "threads": 1, "status": "completed"},
     "paper_path_following": {"n_elements": 29808, "ndof_u": 52024, "ndof_alpha": 15127, "peak_force": 36.421,
                              "peak_load": 0.09425, "steps": 151, "newton_iterations": 1230, "cutbacks": 22,
                              "wall_time_s": 2073, "threads": 1, "final_force": 1.985, "status": "completed"},

@@ -140,3 +140,53 @@ def test_linear_elastic_reference_of_the_study_beam():
     _, q = study_parameters(tpb, "quick")
     notched = tpb.linear_elastic_slope(q, order=2)
     assert notched["slope"] < r2["slope"]
+
+
+WINDOW = {"loading": "window", "stop_load": 0.06}
+
+
+@pytest.fixture(scope="module")
+def window_run(tmp_path_factory):
+    """The diagnostic variant ``--set loading=window`` (Ambati's set-up: the load on a 0.1 mm window
+    of the beam top, no indenter, no void, order 1 everywhere) at quick with the study's default
+    scheme, past its peak: (results of the case, history, parameters)."""
+    import json
+
+    import pandas as pd
+    out = ngtmc.run_study("three_point_bending", resolution="quick", output=tmp_path_factory.mktemp("window"),
+                          overrides=WINDOW, report=False, progress=False, threads=1, vtk=False)
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "completed"
+    _, p = study_parameters(tpb, "quick", WINDOW)
+    r = meta["results"]["main"]
+    print(f"\nwindow variant, quick: peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.5f} mm, "
+          f"{r['steps']} steps, {r['newton_iterations']} Newton")
+    return r, pd.read_csv(out / "history.csv"), p
+
+
+@pytest.mark.slow
+def test_ambatis_own_set_up_solves_past_its_peak(window_run):
+    """Ambati's curve compares unshifted (no gap) with the window variant: its peak within the
+    study's target (42 N/mm, 15 %), and its rising branch within 5 % of the linear-elastic slope
+    of the same beam and element order, below it (the damage that AT-2 starts at once softens it,
+    docs/fidelity.md); past the peak the crack has run."""
+    r, h, p = window_run
+    target = {t["quantity"]: t for t in tpb.targets(p)}["peak_force"]
+    assert target["value"] == 42.0
+    assert r["peak_force"] == pytest.approx(42.0, rel=target["tolerance"])
+    slope = tpb.elastic_slope(h["load"], h["force"])
+    reference = tpb.linear_elastic_slope(p, order=1)["slope"]
+    print(f"slope {slope:.4f} against the linear-elastic {reference:.4f} N/mm per micrometre")
+    assert slope == pytest.approx(reference, rel=0.05) and slope < reference
+    assert h["force"].iloc[-1] < 0.5 * r["peak_force"]
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="measured 2026-11-25: the window variant peaks at 0.04113 mm (quick, path "
+                   "following), 10.6 % before Ambati's 0.046 mm; its peak force is 11.5 % low (37.15 N/mm) on a "
+                   "rising branch 2.3 % stiffer (order 1), so it reaches its peak early (docs/fidelity.md)")
+def test_ambatis_own_set_up_peaks_where_ambati_does(window_run):
+    r, _, p = window_run
+    target = {t["quantity"]: t for t in tpb.targets(p)}["peak_load"]
+    assert target["value"] == pytest.approx(0.046)
+    assert r["peak_load"] == pytest.approx(0.046, rel=target["tolerance"])
