@@ -125,7 +125,7 @@ on one thread), 36.421 at paper (l0/4). The three peaks fall monotonically with 
 of 1.60, which extrapolates to **35.93 N/mm at h = 0** (a straight line through them: 35.38); the
 paper resolution is 1.4 % above that limit, and the limit is 14.5 % below Ambati's 42 N/mm. So
 the gap to Ambati does not close with the mesh: it widens (the AT-2 toughness on a mesh of size
-h, Gc (1 + h / (2 l0)), is 12.5 % high at quick and 6 % high at paper).
+h, Gc (1 + h / (2 l0)), is 25 % high at quick and 12.5 % high at paper).
 ``docs/performance.md`` has the history of these numbers (the near-singular mode of the squeezed
 void that stalled the first paper runs, the fallbacks of the coupled Newton, the step rules).
 
