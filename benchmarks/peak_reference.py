@@ -3,7 +3,8 @@
 ``--du-coarse`` up to ``--fine-from`` and at most ``--du-fine`` from there, until the force has
 fallen below ``--drop`` times its maximum (the crack runs) or the load reaches ``--stop``. Before
 the peak the loading is monotone at every history point, so converged steps of any size reach
-the same states; the fine steps sample the flat top of the curve. ``--scheme monolithic`` uses
+the same states; the fine steps sample the flat top of the curve (``--crack-advance``: finer
+dissipation steps too, where path following switches to them). ``--scheme monolithic`` uses
 fixed-load steps only (at the paper's resolution they stall at 0.0903 mm: the squeezed-void
 mode of ``ngtmc.coupled.FLOOR_RTOL``, which path following accepts at its residual floor).
 Prints and writes a JSON record with the peak (N/mm), its load (mm), steps, Newton iterations
@@ -30,7 +31,7 @@ from ngtmc.study import load_study, study_parameters
 
 def reference_peak(resolution: str, fine_from: float, du_fine: float, du_coarse: float = 2e-3, stop: float = 0.0946,
                    du_min: float = 1e-6, threads: int = 1, overrides: dict | None = None,
-                   scheme: str = "path-following", drop: float = 0.9) -> dict:
+                   scheme: str = "path-following", drop: float = 0.9, crack_advance: float | None = None) -> dict:
     """Run the reference (module docstring) and return its record: loads in mm, forces in N/mm."""
     ngs.SetNumThreads(threads)
     mod = load_study("three_point_bending")
@@ -43,8 +44,10 @@ def reference_peak(resolution: str, fine_from: float, du_fine: float, du_coarse:
                                  ngtmc.AdaptiveStepControl(du_max=du_coarse, k_u=0.0, du_min=du_min), scheme=scheme)
         first.run()
         state = first.get_state()
+        fine = {"coupled": {"crack_advance": crack_advance}} if crack_advance and scheme == "path-following" else {}
         second = ngtmc.Simulation(scene, ngtmc.Schedule.monotonic(stop),
-                                  ngtmc.AdaptiveStepControl(du_max=du_fine, k_u=0.0, du_min=du_min), scheme=scheme)
+                                  ngtmc.AdaptiveStepControl(du_max=du_fine, k_u=0.0, du_min=du_min), scheme=scheme,
+                                  **fine)
         second.set_state(state)
         second.control_state = type(second.control_state)()  # full fine steps from here
         top = 0.0
@@ -60,7 +63,7 @@ def reference_peak(resolution: str, fine_from: float, du_fine: float, du_coarse:
     wall = time.perf_counter() - t0
     force = [float(r["force"]) for r in rows]
     i = max(range(len(force)), key=force.__getitem__)
-    return {"resolution": resolution, "scheme": scheme, "fine_from_mm": fine_from, "du_fine_mm": du_fine, "du_coarse_mm": du_coarse,
+    return {"resolution": resolution, "scheme": scheme, "crack_advance_mm": crack_advance, "fine_from_mm": fine_from, "du_fine_mm": du_fine, "du_coarse_mm": du_coarse,
             "peak_force_N_per_mm": force[i], "peak_load_mm": float(rows[i]["load"]), "steps": len(rows),
             "newton_iterations": int(sum(int(r.get("newton_iterations", 0)) for r in rows)),
             "last_load_mm": float(rows[-1]["load"]), "status": status, "wall_time_s": wall, "threads": threads,
@@ -76,11 +79,13 @@ def main(argv=None):
     ap.add_argument("--stop", type=float, default=0.0946, help="last load (mm)")
     ap.add_argument("--scheme", default="path-following", help="path-following (default) or monolithic")
     ap.add_argument("--drop", type=float, default=0.9, help="stop when the force falls below this fraction of its maximum")
+    ap.add_argument("--crack-advance", type=float, default=None,
+                    help="path following: crack advance per dissipation step from --fine-from (mm; default l0)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", default="benchmarks/results")
     args = ap.parse_args(argv)
     rec = reference_peak(args.resolution, args.fine_from, args.du_fine, args.du_coarse, args.stop, threads=args.threads,
-                         scheme=args.scheme, drop=args.drop)
+                         scheme=args.scheme, drop=args.drop, crack_advance=args.crack_advance)
     stamp = time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())
     path = Path(args.out) / f"three_point_bending-{args.resolution}-{stamp}-peak-reference.json"
     path.parent.mkdir(parents=True, exist_ok=True)
