@@ -314,3 +314,20 @@ def test_checkpoint_state_by_name_and_the_positional_form_still_loads():
     a, b = _Run._decode_checkpoint(new)["state"], _Run._decode_checkpoint(old)["state"]
     assert np.array_equal(a.pop("solver")["u"], b.pop("solver")["u"])
     assert a == b and a["t"] == state["t"] and a["step"] == 7
+
+
+def test_auto_threads_follow_the_mesh_size(monkeypatch):
+    """threads="auto" of a serial run: one NGSolve thread below AUTO_TWO_THREADS_ELEMENTS elements
+    in the largest built scene (a second thread made the quick three-point bending 1.75x slower),
+    two from there; cases whose scene is not built do not count."""
+    import ngtmc.runner as runner
+    from ngtmc.study import study_parameters
+    mod = tiny_study()
+    _, p = study_parameters(mod, "quick")
+    case, unbuilt = mod.cases(p)[0], mod.cases(p)[0]
+    ne = case.build_scene().mesh.ne
+    assert ne < runner.AUTO_TWO_THREADS_ELEMENTS
+    assert runner.auto_threads([case, unbuilt]) == 1
+    monkeypatch.setattr(runner, "AUTO_TWO_THREADS_ELEMENTS", ne)
+    assert runner.auto_threads([case, unbuilt]) == 2
+    assert runner.auto_threads([unbuilt]) == 1

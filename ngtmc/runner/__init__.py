@@ -82,6 +82,23 @@ def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Pa
     return max(cands, key=lambda d: d.stat().st_mtime) if cands else None
 
 
+#: A serial run uses two NGSolve threads only from this many elements in its largest case mesh.
+#: Measured on the 2-core machine, idle, three-point bending to 0.1 mm (path following, same 94
+#: steps and 459 Newton iterations): quick mesh (8632 elements) 97.7 s with one thread against
+#: 170.5 s with two (the sparse factorization and the block-GMRES solves of a small matrix pay
+#: more for the second thread than they gain); paper mesh (29808 elements) 705 ms per iteration
+#: with two threads (idle) against 839 with one (beside another one-thread job).
+AUTO_TWO_THREADS_ELEMENTS = 20000
+
+
+def auto_threads(cases) -> int:
+    """NGSolve threads of a serial run with ``threads="auto"``: 2 if the largest mesh of the
+    cases' (already built) scenes has at least AUTO_TWO_THREADS_ELEMENTS elements, else 1."""
+    from ..scene import Scene
+    sizes = [c.scene.mesh.ne for c in cases if isinstance(getattr(c, "scene", None), Scene)]
+    return 2 if sizes and max(sizes) >= AUTO_TWO_THREADS_ELEMENTS else 1
+
+
 def run_study(name: str | ModuleType, resolution: str | None = None, output: str | Path | None = None,
               overrides: dict | None = None, report: bool | None = None, resume: bool = False,
               progress: bool | Callable = True, *, threads: int | str | None = "auto", checkpoint_every: int = 25,
@@ -114,7 +131,8 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         (with its ``case``).
     threads : int, None or "auto"
         ``ngsolve.SetNumThreads`` (an integer >= 1); the run is inside ``ngsolve.TaskManager()``.
-        None: leave as is. "auto" (default): 2, or 1 per worker when the cases run on a cluster.
+        None: leave as is. "auto" (default): :func:`auto_threads` (2 from AUTO_TWO_THREADS_ELEMENTS
+        elements, else 1), or 1 per worker when the cases run on a cluster.
     checkpoint_every, checkpoint_seconds : checkpoint period in accepted steps and seconds.
     vtk : bool
         Write the ParaView series into ``vtk/``.
@@ -148,7 +166,8 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
     if parallel:
         from .parallel import check_settings
         check_settings(workers, scheduler)     # Dask installed, settings sane: before anything else
-    if threads == "auto":
+    auto = threads == "auto"
+    if auto:
         threads = 1 if parallel else 2
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
                                 or threads < 1):
@@ -189,6 +208,8 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
         run.prepare_resume(meta)
     run.validate()     # bad input is refused here, before any folder is created or any step solved
     import ngsolve as ngs
+    if auto and not parallel:
+        threads = auto_threads(run.cases)
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
