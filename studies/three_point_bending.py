@@ -481,7 +481,7 @@ def figures(p: dict) -> list[dict]:
                    "x": [0.0, h_max], "y": [42.0, 42.0]})
     return [{
         "title": "Peak force against the element size of the band (recorded, default scheme)",
-        "x_title": "h_band (mm; l0 = 0.015 mm)", "y_title": "peak force (N/mm)",
+        "x_title": "h_band (mm; l0 = 0.03 mm)", "y_title": "peak force (N/mm)",
         "caption": ("Peaks of the path-following runs recorded in the study (MEASURED) at quick, medium and paper "
                     "resolution, not computed in this run, with two extrapolations to h = 0: a straight line (the "
                     "AT-2 toughness on a mesh of size h is Gc (1 + h / (2 l0))) and F0 + C h^q with the order "
