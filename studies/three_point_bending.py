@@ -117,7 +117,8 @@ below the lagged single-pass peak of the same mesh (37.65 N/mm); 1.99 N/mm at 0.
 run (peak to 5 N/mm) is 91 of the steps and 811 of the iterations. With ``ngtmc run three-point-bending -r paper`` (two
 threads, otherwise idle machine, 2026-11-25, after the coupled tangent's constant parts were
 assembled once): 153 steps, 1272 iterations, the same peak, 897 s of load steps and 929 s in all
-(15.5 min; 1182 s before that change). The quick command, ``ngtmc run three-point-bending`` (one thread, the
+(15.5 min; 1182 s before that change); a second run after the compilation change, 978 s (16.3
+min, 1277 iterations: two runs differ by about 5 % on this machine). The quick command, ``ngtmc run three-point-bending`` (one thread, the
 default below 20000 elements), took 102 s on the idle machine (80 steps, 518 iterations, 20.6 s
 of set-up). On the same mesh, a tiny-step reference (``python -m benchmarks.peak_reference``:
 dissipation steps of l0/32 and displacement steps of at most 2.5e-5 mm from 0.088 mm) peaks at
