@@ -33,6 +33,7 @@ import numpy as np
 import ngsolve as ngs
 
 from .materials import deformation_gradient, full_deformation_gradient
+from .solver import merged_terms
 
 __all__ = ["FIELDS", "DISPLACEMENT", "VtkWriter", "pvd_text", "write_pvd"]
 
@@ -113,15 +114,13 @@ class VtkWriter:
         l2 = ngs.L2(mesh, order=0)
         v = l2.TestFunction()
         F3 = full_deformation_gradient(deformation_gradient(s.u)).MakeVariable()
-        groups: dict[str, list] = {}
-        for name, density, regions in s.energy_terms(s.u, F=F3):
-            if name.startswith("elastic"):
-                groups.setdefault(regions, []).append(density)
         self._lf_J, self._lf_vm, self._lf_area = (ngs.LinearForm(l2) for _ in range(3))
         J = ngs.Det(F3)
-        for regions, densities in groups.items():
-            dx = s.energy_measure("elastic_vol", regions)
-            sigma = sum(densities).Diff(F3) * F3.trans / J
+        for name, density, regions in merged_terms(s.energy_terms(s.u, F=F3)):  # one elastic density per region set
+            if not name.startswith("elastic"):
+                continue
+            dx = s.energy_measure(name, regions)
+            sigma = density.Diff(F3) * F3.trans / J
             self._lf_J += J * v * dx
             self._lf_vm += _von_mises(sigma).Compile() * v * dx
             self._lf_area += v * dx
