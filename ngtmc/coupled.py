@@ -176,7 +176,7 @@ class CoupledNewton:
         parameter changes). Elastic terms of one region set are one integrand
         (:func:`~ngtmc.solver.merged_terms`), and the replacement of Psi_d by H_n is one term where
         both live at the same points. Three-point bending quick, one thread: tangent assembly
-        100 -> 48 ms, residual 22 -> 12 ms (docs/performance.md)."""
+        100 -> 45 ms, residual 22 -> 10 ms (docs/performance.md)."""
         s = self.s
         (u, a), (_, b) = self.X.TnT()
         A = ngs.BilinearForm(self.X, symmetric=False)

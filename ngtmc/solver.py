@@ -115,6 +115,7 @@ class Solver:
         if compile == "auto":  # C++ code generation pays off on larger meshes only
             compile = "real" if scene.mesh.ne >= AUTO_REAL_COMPILE_ELEMENTS else True
         self._compile = compile
+        self._compiled = {}  # id(cf) -> (cf, compiled) of _maybe_compile
         self.thickness = float(scene.thickness) if d == 2 else 1.0
 
         # ------------------------------------------------------------ spaces
@@ -281,7 +282,7 @@ class Solver:
         """``cf`` compiled as ``compile`` says (C++ code, symbolic, or not at all). The same object
         is compiled once: a C++ compilation costs about 3.4 s whatever the expression (the
         undegraded energy of the void and of the other regions is one object)."""
-        cache = self.__dict__.setdefault("_compiled", {})
+        cache = self._compiled
         hit = cache.get(id(cf))
         if hit is not None and hit[0] is cf:
             return hit[1]

@@ -167,8 +167,8 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
         from .parallel import check_settings
         check_settings(workers, scheduler)     # Dask installed, settings sane: before anything else
     auto = threads == "auto"
-    if auto:
-        threads = 1 if parallel else 2
+    if auto:  # a serial run's count follows its mesh size, known after validate() below
+        threads = 1 if parallel else None
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
                                 or threads < 1):
         raise StudyError(f"threads = {threads!r} is not allowed: give an integer >= 1 (NGSolve threads), "
