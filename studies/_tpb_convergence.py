@@ -52,12 +52,13 @@ def observed_order(h, F, q_range=(0.05, 8.0)) -> float | None:
 def extrapolate(h, F) -> dict:
     """Extrapolations of the peak F(h) to h = 0 (module docstring): ``linear`` (F0 and slope of the
     least-squares line, N/mm and N/mm per mm), and with three points ``order`` and ``richardson``
-    (F0 of F0 + C h^q, None where the order is undefined)."""
+    (F0 of F0 + C h^q, None where the order is undefined), ``richardson_coefficient`` (its C)."""
     h, F = (np.asarray(v, dtype=float) for v in (h, F))
     if h.size < 2:
         raise ValueError("extrapolate needs peaks at two mesh sizes at least")
     slope, F0 = np.polyfit(h, F, 1)
-    out = {"linear": float(F0), "linear_slope": float(slope), "order": None, "richardson": None}
+    out = {"linear": float(F0), "linear_slope": float(slope), "order": None, "richardson": None,
+           "richardson_coefficient": None}
     q = observed_order(h, F) if h.size == 3 else None
     if q is not None:
         i = int(np.argmin(h))
@@ -65,6 +66,7 @@ def extrapolate(h, F) -> dict:
         C = (F[j] - F[i]) / (h[j] ** q - h[i] ** q)
         out["order"] = float(q)
         out["richardson"] = float(F[i] - C * h[i] ** q)
+        out["richardson_coefficient"] = float(C)
     if not all(math.isfinite(v) for v in (out["linear"], out["linear_slope"])):
         raise ValueError("extrapolate: the peaks or mesh sizes are not finite")
     return out

@@ -475,9 +475,7 @@ def figures(p: dict) -> list[dict]:
          "y": (mc["linear"] + mc["linear_slope"] * xs).tolist()},
     ]
     if mc["richardson"] is not None:
-        q, F0 = mc["order"], mc["richardson"]
-        i = int(np.argmin(mc["h"]))
-        C = (mc["peak_force"][i] - F0) / mc["h"][i] ** q
+        q, F0, C = mc["order"], mc["richardson"], mc["richardson_coefficient"]
         series.append({"label": f"F0 + C h^q, observed order q = {q:.2f}: {F0:.2f} N/mm at h = 0", "kind": "curve",
                        "x": xs.tolist(), "y": (F0 + C * xs ** q).tolist()})
     series.append({"label": "Ambati et al. 2015, Fig. 22: 42 N/mm (their mesh)", "kind": "curve",

@@ -14,6 +14,7 @@ def test_richardson_recovers_the_limit_and_the_order_of_a_power_law(q):
     out = extrapolate(H, F)
     assert out["order"] == pytest.approx(q, rel=1e-9)
     assert out["richardson"] == pytest.approx(30.0, rel=1e-9)
+    assert out["richardson_coefficient"] == pytest.approx(500.0, rel=1e-9)
 
 
 def test_the_linear_extrapolation_is_exact_for_linear_data_and_the_order_is_one():
