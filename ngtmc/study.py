@@ -41,7 +41,7 @@ def data_path(name: str):
 SOLVER_PARAMETERS = {
     "scheme": ("single-pass", "-", "solution scheme of a load step: 'single-pass' (paper), 'staggered', 'monolithic' or "
                                    "'path-following' (monolithic with dissipation control where the crack grows)"),
-    "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, 25 s to compile; "
+    "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, about 3.4 s to compile per expression; "
                              "falls back to 'symbolic' without a C++ compiler), 'symbolic', 'none', or 'auto' "
                              "('real' on meshes of 5000 elements or more)"),
 }
