@@ -43,8 +43,9 @@ regions, N/mm), times a growth factor: where the damage grows stably (the load g
 direction of the schedule) and a dissipation step converged in at most GROWTH_ITERATIONS Newton
 iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base;
 after a displacement step the factor is GROWTH_START (below 1: fine samples at the peak), and it
-doubles back to 1 along a snap-back; a cut-back at factor g sets a ceiling g / 2**cutbacks (at least
-1), which GROWTH_CEILING_STEPS easy steps at it double again.
+doubles back to 1 along a snap-back. A cut-back sets a ceiling on the product of the scale and the
+growth factor: the product at which the step then converged; GROWTH_CEILING_STEPS easy steps at
+it double it again (up to GROWTH_MAX).
 
 Units: mm, N, MPa; D per mm of thickness in 2D.
 """
@@ -71,12 +72,26 @@ GROWTH_ITERATIONS = 6
 #: from the start the quick three-point bending's sampled peak was 1.2 % below the converged one.
 GROWTH_START = 0.25
 
-#: A cut-back of a dissipation step at growth factor g sets a ceiling of g / 2**cutbacks (at least
-#: 1) on the growth factor; GROWTH_CEILING_STEPS easy steps of stable growth at the ceiling double
-#: it again (up to GROWTH_MAX). Without it, the post-failure tail of the three-point bending at the
-#: paper's resolution went in cycles of five steps (growth 1, 2, 4, 8, then 16 failed in about 14
-#: Newton iterations and was cut back), so a third of its iterations were failed attempts.
+#: A cut-back of a dissipation step sets a ceiling on the factor of dD (the step control's scale
+#: times the growth factor): the factor at which the step then converged, g s / 2**cutbacks (at
+#: least CEILING_MIN);
+#: GROWTH_CEILING_STEPS easy steps at the ceiling double it again (up to GROWTH_MAX). Without it, the
+#: post-failure tail of the three-point bending at the paper's resolution went in cycles of five
+#: steps (growth 1, 2, 4, 8, then 16 failed in about 14 Newton iterations and was cut back), so a
+#: third of its iterations were failed attempts. A ceiling on the growth factor alone (at least 1)
+#: still let the crack run go in cycles of six steps: four easy ones at half the base dD while the
+#: step control's scale recovered from the cut-back, one of 16-22 iterations at the base, one more
+#: cut-back.
 GROWTH_CEILING_STEPS = 16
+
+#: The lowest ceiling a cut-back sets, as a factor of the base dD (one l0 of crack). Measured in the
+#: crack run of the three-point bending at the paper's resolution: steps at a quarter of the base
+#: took 4 Newton iterations, at half of it 6, at the base 16-22 or failed; so half the base moves
+#: the crack furthest per iteration. With a ceiling of at least 1 the crack run went in cycles of
+#: six steps (four easy ones at half the base while the step control's scale recovered from a
+#: cut-back, one of 16-22 iterations at the base, one more cut-back); with a floor of 1/4 it took
+#: more steps and iterations than with 1 (docs/performance.md).
+CEILING_MIN = 0.5
 
 
 class DissipationPath:
@@ -121,12 +136,23 @@ class DissipationPath:
         #: (t_start, t_end) of the schedule segment of the last attempt
         self.segment = None
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
+        self._factor_tried = None  # factor of dD of the last dissipation attempt
+        #: the step control's scale when the current step began: its halvings within the step halve
+        #: dD; across steps the growth factor and its ceiling carry the memory of cut-backs
+        self._scale_ref = 1.0  # the step control's initial scale
 
     @property
     def target(self) -> float:
         """Dissipation per step dD, N mm (per mm of thickness in 2D), at the current scale and
         growth factor."""
-        return self.gc_ref * self.crack_advance * self.sim.control_state.scale * self.growth
+        return self.gc_ref * self.crack_advance * self.factor
+
+    @property
+    def factor(self) -> float:
+        """Factor of the base dD: the growth factor (at most the ceiling a cut-back set,
+        GROWTH_CEILING_STEPS), halved with each failed attempt of the current step (the step
+        control's scale relative to its value when the step began)."""
+        return self.growth * self.sim.control_state.scale / self._scale_ref
 
     def _segment(self):
         """(t_start, t_end) of the schedule segment the simulation is on."""
@@ -158,6 +184,7 @@ class DissipationPath:
             self.ceiling, self.at_ceiling = GROWTH_MAX, 0
         self.segment = seg
         dD = self.target
+        self._factor_tried = self.factor
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
                 "projected": 0}
         saved = s.get_state()
@@ -274,11 +301,13 @@ class DissipationPath:
         if self._last_kind != "dissipation":
             self.growth = GROWTH_START
         elif cutbacks:
-            self.ceiling = max(1.0, self.growth / 2.0 ** cutbacks)
+            # the factor at which the step converged after its cut-backs
+            tried = self._factor_tried if self._factor_tried is not None else self.factor
+            self.ceiling = max(CEILING_MIN, tried)
             self.at_ceiling = 0
-            self.growth = min(self.growth, self.ceiling)
+            self.growth = min(tried, self.ceiling)
         elif not forward:
-            self.growth = min(1.0, 2.0 * self.growth)
+            self.growth = min(1.0, self.ceiling, 2.0 * self.growth)
         elif iterations <= GROWTH_ITERATIONS:
             if self.growth >= self.ceiling:
                 self.at_ceiling += 1
@@ -286,6 +315,7 @@ class DissipationPath:
                     self.ceiling, self.at_ceiling = min(GROWTH_MAX, 2.0 * self.ceiling), 0
             self.growth = min(self.ceiling, 2.0 * self.growth)
         self._last_kind = None
+        self._scale_ref = self.sim.control_state.scale
         d = self.coupled.dissipation()
         delta = d - self.d_prev
         self.d_prev = d
@@ -306,7 +336,7 @@ class DissipationPath:
 
     def get_state(self) -> dict:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
-        return {"growth": self.growth, "ceiling": self.ceiling, "at_ceiling": self.at_ceiling, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+        return {"growth": self.growth, "ceiling": self.ceiling, "scale_ref": self._scale_ref, "at_ceiling": self.at_ceiling, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
                 "delta_d_prev": self.delta_d_prev}
 
@@ -341,4 +371,5 @@ class DissipationPath:
         self.growth = float(st.get("growth", GROWTH_START))
         self.ceiling = float(st.get("ceiling", GROWTH_MAX))
         self.at_ceiling = int(st.get("at_ceiling", 0))
+        self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))
         self.segment = st.get("segment")

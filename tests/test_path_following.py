@@ -159,28 +159,64 @@ def test_turning_point_starts_the_rule_afresh():
 
 
 def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
-    """The growth factor of dD doubles after easy steps of stable growth; a cut-back at growth g
-    sets a ceiling g / 2**cutbacks (at least 1) that holds until GROWTH_CEILING_STEPS easy steps
-    at it double it (so a tail that failed at 16x runs at 8x, not in cycles of 1, 2, 4, 8, 16)."""
-    from ngtmc.path import GROWTH_CEILING_STEPS, GROWTH_MAX
+    """The growth factor of dD doubles after easy steps of stable growth; a cut-back sets a ceiling
+    at the factor (scale times growth) at which the step converged, at least CEILING_MIN, that holds
+    until GROWTH_CEILING_STEPS easy steps at it double it (so a tail that failed at 16x runs at 8x,
+    not in cycles of 1, 2, 4, 8, 16, and a crack run that failed at the base runs at half of it
+    also after the step control's scale has recovered)."""
+    from ngtmc.path import CEILING_MIN, GROWTH_CEILING_STEPS, GROWTH_MAX
     sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
                            scheme="path-following")
     path, s = sim._path, sim.solver
 
-    def step(iterations, cutbacks=0):
+    def step(iterations, cutbacks=0, converged_at=None, forward=True):
         path._last_kind = "dissipation"
-        s.load = path.load_n + 1e-5  # forward: the load goes on with the schedule
+        # the factor of the attempt that converged: halved per cut-back by the step control's scale
+        path._factor_tried = converged_at if converged_at is not None else path.factor
+        s.load = path.load_n + (1e-5 if forward else -1e-5)
         path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
         return path.growth
 
     path.growth = 1.0
     assert [step(4) for _ in range(5)] == [2.0, 4.0, 8.0, GROWTH_MAX, GROWTH_MAX]
-    assert step(20, cutbacks=1) == pytest.approx(GROWTH_MAX / 2)   # cut back at 16: ceiling 8
+    assert step(20, cutbacks=1, converged_at=GROWTH_MAX / 2) == GROWTH_MAX / 2   # failed at 16: ceiling 8
     assert [step(4) for _ in range(GROWTH_CEILING_STEPS - 1)] == [GROWTH_MAX / 2] * (GROWTH_CEILING_STEPS - 1)
     assert step(4) == GROWTH_MAX                                    # the ceiling doubles again
     assert step(9) == GROWTH_MAX                                    # a hard step keeps the factor
-    assert step(20, cutbacks=2) == pytest.approx(GROWTH_MAX / 4)
+    assert step(20, cutbacks=2, converged_at=GROWTH_MAX / 4) == GROWTH_MAX / 4
+    # a crack run: failed at the base (factor 1), converged at half of it; snap-back steps (the load
+    # goes back) double the growth up to 1, but not past the ceiling
+    path.growth, path.ceiling = 1.0, GROWTH_MAX
+    assert step(20, cutbacks=1, converged_at=0.5) == 0.5
+    assert path.ceiling == 0.5
+    assert [step(6, forward=False) for _ in range(3)] == [0.5] * 3
     path.growth = 1.0
-    assert step(20, cutbacks=3) == 1.0                              # the ceiling is at least 1
+    assert step(20, cutbacks=3, converged_at=0.125) == 0.125        # the next step starts where this one converged,
+    assert path.ceiling == CEILING_MIN                              # below a ceiling of at least CEILING_MIN
+    assert [step(4) for _ in range(3)] == [0.25, 0.5, 0.5]
     state = path.get_state()
-    assert state["ceiling"] == 1.0 and state["at_ceiling"] == 0
+    assert state["ceiling"] == CEILING_MIN and state["at_ceiling"] == 1   # one step taken at it
+
+
+def test_the_step_controls_scale_halves_the_dissipation_step_only_within_a_step():
+    """dD is the base times the growth factor, halved with each failed attempt of the step (the step
+    control's scale against its value when the step began); the step control's recovery of its
+    scale over the next steps does not move dD: the growth factor and its ceiling hold that memory."""
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    path = sim._path
+    base = path.gc_ref * path.crack_advance
+    path.growth = 1.0
+    assert path.target == pytest.approx(base)
+    sim.control_state, _ = sim.control.failed(sim.control_state, 1e-4)   # a failed attempt: half
+    assert path.target == pytest.approx(base / 2)
+    path._last_kind, path._factor_tried = "dissipation", path.factor
+    sim.solver.load = path.load_n + 1e-5
+    path.accepted(1e-5, iterations=20, cutbacks=1)
+    assert path.target == pytest.approx(base / 2)                       # the next step: where it converged
+    sim.control_state = sim.control.initial_state()                      # the step control's scale recovers
+    path._scale_ref = sim.control_state.scale * 0.5                      # (its value when that step began)
+    assert path.target == pytest.approx(base)                           # only within a step would that count
+    path._scale_ref = sim.control_state.scale
+    assert path.target == pytest.approx(base / 2)
+    assert path.get_state()["scale_ref"] == 1.0
