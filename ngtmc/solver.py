@@ -40,6 +40,9 @@ __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
 #: Mesh size (elements) from which compile="auto" generates C++ code for the energies.
 AUTO_REAL_COMPILE_ELEMENTS = 5000
 
+#: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
+DISPLACEMENT_RTOL = 1e-8
+
 TIMING_KEYS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
 
 
@@ -48,14 +51,16 @@ class NewtonOptions:
     """Options of the displacement Newton solver.
 
     max_iterations: iterations before the attempt counts as failed (the step is then halved);
-    rtol: residual norm relative to the reaction-force scale; atol: absolute residual norm, N
+    rtol: residual norm relative to the reaction-force scale (None: each Newton solver's own
+    default, DISPLACEMENT_RTOL for the displacement Newton and ``ngtmc.coupled.COUPLED_RTOL`` for
+    the coupled Newton of the monolithic schemes); atol: absolute residual norm, N
     (None: 1e-12 E_max L^(d-1), L the diagonal of the mesh's bounding box); armijo: sufficient
     decrease constant; max_line_search: halvings of the step length before giving up;
     linear_solver: "sparsecholesky" (symmetric tangents, fastest) or "umfpack".
     """
 
     max_iterations: int = 25
-    rtol: float = 1e-8
+    rtol: float | None = None
     atol: float | None = None
     armijo: float = 1e-4
     max_line_search: int = 12
@@ -66,7 +71,7 @@ class NewtonOptions:
             raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
         if int(self.max_iterations) < 1:
             raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
-        if not (0 < self.rtol < 1):
+        if self.rtol is not None and not (0 < self.rtol < 1):
             raise ValueError(f"rtol = {self.rtol!r} is outside the allowed range (0, 1)")
 
 
@@ -426,6 +431,12 @@ class Solver:
         self._scratch_guard.Interpolate(ngs.Det(deformation_gradient(self.u)))
         return self._scratch_guard.vec.FV().NumPy()
 
+    @property
+    def displacement_rtol(self) -> float:
+        """Relative residual tolerance of the displacement Newton: ``NewtonOptions.rtol``, or
+        DISPLACEMENT_RTOL where that is None."""
+        return self.newton.rtol if self.newton.rtol is not None else DISPLACEMENT_RTOL
+
     def min_J(self) -> float:
         """Smallest det F at the guard quadrature points, dimensionless."""
         return float(self.J_values().min())
@@ -671,6 +682,7 @@ class Solver:
         the mass matrix, mu raised by tenfold until the direction descends. On failure u is left
         at the last iterate; the caller restores the state."""
         opt = self.newton
+        rtol = self.displacement_rtol
         u = self.u.vec
         r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
         self._r_valid = False
@@ -695,11 +707,11 @@ class Solver:
             if not np.isfinite(res):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
             if _DEBUG:
-                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} r_ref {r_ref:.3e} tol {opt.rtol * max(reac, r_ref) + opt.atol:.3e}")
+                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} r_ref {r_ref:.3e} tol {rtol * max(reac, r_ref) + opt.atol:.3e}")
             if not lifted:
                 if r_ref == 0.0:
                     r_ref = res
-                if res <= opt.rtol * max(reac, r_ref) + opt.atol:
+                if res <= rtol * max(reac, r_ref) + opt.atol:
                     self.load = load
                     self._r_valid = True
                     return NewtonResult(True, it - 1, res, solve_time, assembly_time, shifted)
@@ -793,7 +805,7 @@ class Solver:
         rem = np.where(self._dir_np, target - uN, 0.0)
         res = float(np.linalg.norm(rN[self._free_np]))
         reac = float(np.linalg.norm(rN[self._dir_np]))
-        if not np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))) and res <= opt.rtol * max(reac, r_ref) + opt.atol:
+        if not np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))) and res <= rtol * max(reac, r_ref) + opt.atol:
             self.load = load
             self._r_valid = True
             return NewtonResult(True, opt.max_iterations, res, solve_time, assembly_time, shifted)
