@@ -115,10 +115,10 @@ unattended (2026-11-25, one thread beside two other jobs): 151 steps, 1230 itera
 22 cut-backs, 2073 s; **peak 36.421 N/mm at 0.0942 mm, 13.3 % below Ambati's 42 N/mm** and 3.3 %
 below the lagged single-pass peak of the same mesh (37.65 N/mm); 1.99 N/mm at 0.15 mm. The crack
 run (peak to 5 N/mm) is 91 of the steps and 811 of the iterations. With ``ngtmc run three-point-bending -r paper`` (two
-threads, otherwise idle machine, 2026-11-25, after the coupled tangent's constant parts were
-assembled once): 153 steps, 1272 iterations, the same peak, 897 s of load steps and 929 s in all
-(15.5 min; 1182 s before that change); a second run after the compilation change, 978 s (16.3
-min, 1277 iterations: two runs differ by about 5 % on this machine). The quick command, ``ngtmc run three-point-bending`` (one thread, the
+threads, otherwise idle machine, 2026-11-25): 153 steps, 1277 iterations, 978 s in all before the
+dissipation step's ceiling (:data:`ngtmc.path.CEILING_MIN`) and the coupled Newton's own tolerance
+(:data:`ngtmc.coupled.COUPLED_RTOL`); after them **152 steps, 953 iterations, 10 cut-backs, 725 s
+in all (12.1 min)**, the same peak (36.421 N/mm at 0.09425 mm) and 1.984 N/mm at 0.15 mm. The quick command, ``ngtmc run three-point-bending`` (one thread, the
 default below 20000 elements), took 102 s on the idle machine (80 steps, 518 iterations, 20.6 s
 of set-up). On the same mesh, a tiny-step reference (``python -m benchmarks.peak_reference``:
 dissipation steps of l0/32 and displacement steps of at most 2.5e-5 mm from 0.088 mm) peaks at
@@ -313,8 +313,9 @@ MEASURED = {
                               "peak_load": 0.09406, "steps": 109, "newton_iterations": 774, "cutbacks": 8,
                               "wall_time_s": 250, "threads": 1, "status": "completed"},
     "paper_path_following": {"n_elements": 29808, "ndof_u": 52024, "ndof_alpha": 15127, "peak_force": 36.421,
-                             "peak_load": 0.09425, "steps": 151, "newton_iterations": 1230, "cutbacks": 22,
-                             "wall_time_s": 2073, "threads": 1, "final_force": 1.985, "status": "completed"},
+                             "peak_load": 0.09425, "steps": 152, "newton_iterations": 953, "cutbacks": 10,
+                             "wall_time_s": 725, "threads": 2, "final_force": 1.984, "status": "completed",
+                             "note": "ngtmc run three-point-bending -r paper, idle machine (2026-11-25)"},
     # the paper's single-pass scheme (the default before 2026-11-25)
     "quick": {"n_elements": 8632, "ndof_u": 14372, "peak_force": 38.763, "peak_load": 0.09686, "steps": 740,
               "newton_iterations": 1680, "wall_time_s": 386, "final_force": 2.506, "status": "completed"},
