@@ -108,7 +108,7 @@ The converged run costs 4.3x the Newton iterations (7159 against 1680).
 **Path following gives the converged curve for less work than the lagged one; it is this
 study's default scheme** (``scheme`` = ``path-following``: the monolithic Newton with dissipation
 control while the crack grows, :mod:`ngtmc.path`; ``--set scheme=single-pass`` runs the paper's).
-Quick: 83 steps, 534 Newton iterations, 4 cut-backs (195.5 s on a shared machine, one thread),
+Quick: 78 steps, 462 Newton iterations, 2 cut-backs (89 s, idle machine, one thread),
 peak 37.429 N/mm at 0.0948 mm, the converged staggered peak (37.448) to 0.05 %, against 740
 steps, 1680 iterations and 38.763 N/mm (+3.5 %, the lag) single-pass. Paper resolution,
 unattended (2026-11-25, one thread beside two other jobs): 151 steps, 1230 iterations,
@@ -119,8 +119,8 @@ threads, otherwise idle machine, 2026-11-25): 153 steps, 1277 iterations, 978 s 
 dissipation step's ceiling (:data:`ngtmc.path.CEILING_MIN`) and the coupled Newton's own tolerance
 (:data:`ngtmc.coupled.COUPLED_RTOL`); after them **152 steps, 953 iterations, 10 cut-backs, 725 s
 in all (12.1 min)**, the same peak (36.421 N/mm at 0.09425 mm) and 1.984 N/mm at 0.15 mm. The quick command, ``ngtmc run three-point-bending`` (one thread, the
-default below 20000 elements), took 102 s on the idle machine (80 steps, 518 iterations, 20.6 s
-of set-up). On the same mesh, a tiny-step reference (``python -m benchmarks.peak_reference``:
+default below 20000 elements), takes 89 s on the idle machine (78 steps, 462 iterations, 16.0 s
+of set-up; 103 s with ``pip install -e .`` in a fresh venv). On the same mesh, a tiny-step reference (``python -m benchmarks.peak_reference``:
 dissipation steps of l0/32 and displacement steps of at most 2.5e-5 mm from 0.088 mm) peaks at
 36.305 N/mm at 0.09387 mm: the study's peak is 0.32 % above it.
 
@@ -307,8 +307,9 @@ SNAPSHOT_LOADS = [0.05, 0.08, 0.09, 0.1, 0.11, 0.13, 0.15]
 MEASURED = {
     # the default scheme, path following (2026-11-25; one thread, other jobs on the machine)
     "quick_path_following": {"n_elements": 8632, "ndof_u": 14372, "peak_force": 37.429, "peak_load": 0.09480,
-                             "steps": 83, "newton_iterations": 534, "cutbacks": 4, "wall_time_s": 195.5,
-                             "final_force": 2.326, "status": "completed"},
+                             "steps": 78, "newton_iterations": 462, "cutbacks": 2, "wall_time_s": 89,
+                             "threads": 1, "final_force": 2.327, "status": "completed",
+                             "note": "the README command on the idle machine, fresh venv (2026-11-25)"},
     "medium_path_following": {"n_elements": 14048, "ndof_u": 22054, "ndof_alpha": 7169, "peak_force": 36.711,
                               "peak_load": 0.09406, "steps": 109, "newton_iterations": 774, "cutbacks": 8,
                               "wall_time_s": 250, "threads": 1, "status": "completed"},
