@@ -276,6 +276,15 @@ MEASURED = {
                              "monotonic_newton_iterations": 676, "main_steps": 169, "main_newton_iterations": 762,
                              "first_loading_peak_force": 18079, "reload_peak_force": 18598, "reload_peak_load": 6.311,
                              "wall_time_s": 535, "status": "completed"},
+    "paper_single_pass_partial": {"note": "ngtmc run l-panel -r paper (the study's defaults: single-pass, Eq. 20, "
+                                          "du_max 0.01 mm, du_min 1e-8 mm), one thread, one or two other jobs on the "
+                                          "machine (2026-11-25); stopped in the crack run of the first loading at "
+                                          "6.2854 mm after 874 steps, 1384 Newton iterations and 4738 s (about 850 s of it "
+                                          "stopped with SIGSTOP while another run was timed): steps of "
+                                          "1.6e-5..5e-5 mm, about a day to the end of the schedule at that pace",
+                                  "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355, "steps": 874, "newton_iterations": 1384, "wall_time_s": 4738,
+                                  "force_at_6.0": 5050, "first_loading_peak_force": 17257,
+                                  "first_loading_peak_load": 6.274, "force_at_stop": 8354, "status": "interrupted"},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
