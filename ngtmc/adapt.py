@@ -36,9 +36,12 @@ The transfer to the refined mesh (:func:`refine`):
 
 Curved geometry stays curved: the mesh is curved again at its order after each refinement.
 
-Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); schemes
-"single-pass", "staggered" and "monolithic" (path following keeps arrays of the mesh it started
-on); the adjoint of :mod:`ngtmc.sensitivities` refuses a run whose mesh changed; a run folder
+Path following: a refined step is solved again as the same kind of step, a dissipation step of
+the same dD (its load may land elsewhere) or a displacement step to the same load, from the
+refined solution (:meth:`ngtmc.path.DissipationPath.resolve`); the secant predictor restarts
+from the state before the step.
+
+Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); the adjoint of :mod:`ngtmc.sensitivities` refuses a run whose mesh changed; a run folder
 (``simulate(out_dir=...)``) does not take ``adapt`` yet (snapshots of a changing mesh).
 
 Units: mm.

@@ -137,6 +137,7 @@ class DissipationPath:
         self.segment = None
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
         self._factor_tried = None  # factor of dD of the last dissipation attempt
+        self._last_dD = None  # dD of the last successful dissipation attempt, N mm (resolve)
         #: the step control's scale when the current step began: its halvings within the step halve
         #: dD; across steps the growth factor and its ceiling carry the memory of cut-backs
         self._scale_ref = 1.0  # the step control's initial scale
@@ -213,6 +214,7 @@ class DissipationPath:
         lo, hi = min(l_a, l_b), max(l_a, l_b)
         du_max = sim.control.du_max
         slow = False
+        dD_small = None
         r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
         sim._add(info, r)
         if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
@@ -240,6 +242,7 @@ class DissipationPath:
                 self.dissipation_steps += 1
                 self.dissipating = not slow
                 self._last_kind = "dissipation"
+                self._last_dD = dD_small if dD_small is not None else dD
                 return True, info
             r.message = "history not finite (J <= 0 at a history point)"
         s.set_state(keep)
@@ -253,6 +256,49 @@ class DissipationPath:
                 info["t_new"] = t1
             return ok, info
         info["message"] = f"dissipation step of {dD:.4g} N mm: {r.message}"
+        return False, info
+
+    def mesh_changed(self, coupled, before: dict):
+        """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`): ``coupled`` is the
+        coupled Newton rebuilt on the refined mesh, ``before`` the state before the step (the last
+        accepted one) transferred to it. The secant predictor restarts from that state (the state
+        before it lives on the old mesh), and the dissipation of the last accepted state is taken
+        again on the refined mesh (the same P1 field, so the same value to round-off)."""
+        self.coupled = coupled
+        self.x_n = (np.array(before["u"], dtype=float), np.array(before["alpha"], dtype=float))
+        self.x_prev, self.load_prev = None, None
+        self.d_prev = coupled.dissipation(np.asarray(before["alpha_committed"], dtype=float))
+
+    def resolve(self, load: float, t_new: float):
+        """Solve the step just converged on the old mesh again on the refined one (predictor-
+        corrector of :mod:`ngtmc.adapt`): the same kind of step, a dissipation step of the same dD
+        (which may leave the load elsewhere) or a displacement step to the same ``load`` (mm),
+        from the solver's current u and alpha (the transferred solution, with the boundary values
+        of ``load``) and its committed state (the one before the step). ``t_new``: the pseudo-time
+        the old mesh's step reached. Returns (ok, info) as :meth:`attempt`."""
+        sim, s = self.sim, self.sim.solver
+        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
+                "projected": 0}
+        if self._last_kind != "dissipation":
+            ok, info = sim._coupled_newton(load, info)
+            if ok:
+                info["t_new"] = t_new
+            return ok, info
+        t0, t1 = self._segment()
+        sch = sim.schedule
+        lo, hi = sorted((sch.load(t0), sch.load(t1)))
+        keep = s.get_state()
+        r = self.coupled.solve(load, dissipation=self._last_dD, load_bounds=(lo, hi))
+        sim._add(info, r)
+        if r.converged:
+            H_trial = s.trial_history()
+            if np.all(np.isfinite(H_trial)):
+                info["H_trial"] = H_trial
+                info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
+                return True, info
+            r.message = "history not finite (J <= 0 at a history point)"
+        s.set_state(keep)
+        info["message"] = f"dissipation step of {self._last_dD:.4g} N mm on the refined mesh: {r.message}"
         return False, info
 
     def _fixed(self, load: float, info: dict):

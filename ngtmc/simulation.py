@@ -156,9 +156,6 @@ class Simulation:
             from .adapt import Adaptivity, private_scene
             if not isinstance(adapt, Adaptivity):
                 raise TypeError(f"adapt must be an ngtmc.Adaptivity (h_crack mm, ...), got {type(adapt).__name__}")
-            if scheme == "path-following" or (coupled or {}).get("path") is not None:
-                raise ValueError("adapt: adaptive refinement does not support path following so far; use scheme="
-                                 "'single-pass', 'staggered' or 'monolithic'")
             scene = private_scene(scene)  # the run refines its own copy of the mesh
         self.adapt = adapt
         self.scene = scene
@@ -500,15 +497,23 @@ class Simulation:
             marked = amr.mark(s, self.adapt, info.get("H_trial"))
             if not marked.any():
                 break
+            load_step = s.load   # the load the step reached (path following solves for it)
             record, (saved,) = amr.refine(s, marked, [saved])
             self.refinements.append((self.step + 1, record))
             if self.coupled is not None:  # its compound space and forms are built on the solver's
                 from .coupled import CoupledNewton
                 self.coupled = CoupledNewton(s, **self._coupled_options)
             u_pred = s.u.vec.FV().NumPy().copy()
+            a_pred = s.alpha.vec.FV().NumPy().copy() if s.alpha is not None else None
             s.set_state(saved)
             s.u.vec.FV().NumPy()[:] = u_pred
-            ok, info = self._attempt(t_new)
+            if self._path is not None:
+                # the same kind of step (dissipation dD, or displacement) from the refined solution
+                self._path.mesh_changed(self.coupled, saved)
+                s.alpha.vec.FV().NumPy()[:] = a_pred
+                ok, info = self._path.resolve(load_step, info.get("t_new", t_new))
+            else:
+                ok, info = self._attempt(t_new)
             for k in totals:
                 totals[k] += info[k]
             if not ok:
