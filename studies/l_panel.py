@@ -144,8 +144,18 @@ First-loading peak against Ambati et al. 2015 (case ``monotonic``)
   steps of 1e-5 mm). The peak falls by 19 % from quick to medium, more than the sqrt of the
   toughness factors (1.84 -> 1.42: 12 %). Extrapolated to h -> 0 it lies between 14.3 kN (linear
   in h) and 15.6 kN (medium divided by sqrt(1.42)), -11 % to -2 % against Ambati, who used h = 0.5
-  mm = 0.42 l0: the first-loading peak is consistent with Ambati's once the mesh resolves l0. That
-  range is an estimate; the paper resolution (h_band = 0.5 mm) was not run.
+  mm = 0.42 l0: the first-loading peak is consistent with Ambati's once the mesh resolves l0.
+* **Measured at the paper's resolution** (h_band = 0.5 mm, 102359 elements, 102710 u and 51355
+  alpha dofs; ``ngtmc run l-panel -r paper --set scheme=path-following --workers 2``, 2026-12-01,
+  ``MEASURED["paper_path_following_partial"]``): the first-loading peak is **15.72 kN at 6.242 mm**
+  in case ``monotonic`` and 15.75 kN at 6.242 mm in case ``main`` (the same peak, sampled by other
+  displacement steps), **-1.7 % against Ambati's 16 kN**, inside the estimate above. The paper's
+  single-pass scheme on the same mesh peaked at 17.26 kN at 6.274 mm (a stopped run,
+  ``MEASURED["paper_single_pass_partial"]``): its
+  one-step damage lag puts it 9.8 % above the path-following peak, which has no lag (the peak
+  is sampled by displacement steps of about 0.036 mm; the next step, a dissipation step, went
+  back to 6.240 mm, so the limit point lies there). Both runs were stopped in the crack
+  run (see MEASURED), so the paper-resolution reload peak is not measured.
 
 l0 sweep (case ``monotonic``, quick; ``L0_SWEEP``)
 ---------------------------------------------------
@@ -285,6 +295,22 @@ MEASURED = {
                                   "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355, "steps": 874, "newton_iterations": 1384, "wall_time_s": 4738,
                                   "force_at_6.0": 5050, "first_loading_peak_force": 17257,
                                   "first_loading_peak_load": 6.274, "force_at_stop": 8354, "status": "interrupted"},
+    "paper_path_following_partial": {"note": "ngtmc run l-panel -r paper --set scheme=path-following --workers 2 (both "
+                                             "cases at once, one thread each, beside test and benchmark runs on the 2 "
+                                             "cores: wall times are upper bounds), 2026-12-01; interrupted once and "
+                                             "resumed (--resume), then stopped in the crack run. Each crack-run step "
+                                             "dissipated one l0 of crack (W_f + 10.6 N mm = Gc l0 x 100 mm) in 4-6 Newton "
+                                             "iterations and 35-80 s; twice that dissipation failed (34 and 22 iterations "
+                                             "with cut-backs), so the dissipation step stayed at one l0",
+                                     "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355, "setup_s": 106,
+                                     "monotonic_steps": 79, "monotonic_newton_iterations": 320, "monotonic_cutbacks": 3,
+                                     "monotonic_wall_time_s": 3141, "monotonic_peak_force": 15723,
+                                     "monotonic_peak_load": 6.2417, "monotonic_force_at_stop": 13338,
+                                     "monotonic_load_at_stop": 6.2197, "monotonic_wf_at_stop": 415.1,
+                                     "main_steps": 69, "main_newton_iterations": 289, "main_cutbacks": 3,
+                                     "main_wall_time_s": 3215, "first_loading_peak_force": 15746,
+                                     "first_loading_peak_load": 6.2422, "main_force_at_stop": 13654,
+                                     "main_load_at_stop": 6.2201, "status": "interrupted"},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
@@ -556,7 +582,8 @@ EXPECTED = {
         "source": AMBATI_SOURCE,
         "xfail": "quick: monotonic peak measured 22.96 kN at 6.451 mm against Ambati's about 16 kN (+43.5 %); "
                  "h_band = 2 mm = 1.7 l0 overestimates the toughness by 1 + h/(2 l0) = 1.84; medium (h_band = 1 mm) "
-                 "18.63 kN (+16.4 %), extrapolated to h -> 0 about 14.3-15.6 kN (see the study)"},
+                 "18.63 kN (+16.4 %), extrapolated to h -> 0 about 14.3-15.6 kN; at the paper's resolution with path "
+                 "following 15.72 kN (-1.7 %, see the study)"},
     "monotonic_peak_force": {"case": "monotonic", "quantity": "peak_force", "value": 22962.0, "unit": "N", "rel": 0.05,
                              "source": "measured, quick (regression guard; l0 = 1.1875 mm)"},
     "monotonic_peak_load": {"case": "monotonic", "quantity": "peak_load", "value": 6.451, "unit": "mm", "abs": 0.03,
