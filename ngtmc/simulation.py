@@ -500,9 +500,8 @@ class Simulation:
             load_step = s.load   # the load the step reached (path following solves for it)
             record, (saved,) = amr.refine(s, marked, [saved])
             self.refinements.append((self.step + 1, record))
-            if self.coupled is not None:  # its compound space and forms are built on the solver's
-                from .coupled import CoupledNewton
-                self.coupled = CoupledNewton(s, **self._coupled_options)
+            if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
+                self.coupled.mesh_changed()
             u_pred = s.u.vec.FV().NumPy().copy()
             a_pred = s.alpha.vec.FV().NumPy().copy() if s.alpha is not None else None
             s.set_state(saved)
