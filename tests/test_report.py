@@ -362,3 +362,22 @@ def test_study_figures_from_metadata(tpb_run):
 def test_no_study_figures_section_without_figures(tpb_run):
     page = report.render_report(tpb_run).read_text(encoding="utf-8")
     assert "study-figures" not in _ids(page)
+
+
+def test_units_note_states_what_forces_and_energies_are_for(tmp_path):
+    """The forces and energies of a 2D run are for its thickness: per mm of thickness at 1 mm, for
+    the whole specimen otherwise (the L-panel's 100 mm), and no thickness phrase in 3D."""
+    from ngtmc.report.page import thickness_phrase
+    assert thickness_phrase(1.0) == "per mm of thickness"
+    assert thickness_phrase(100.0) == "for the thickness of 100 mm"
+    assert thickness_phrase(None) == ""
+    run = write_run(tmp_path / "thick")
+    meta = json.loads((run / "metadata.json").read_text(encoding="utf-8"))
+    meta.update(thickness_mm=100.0, force_unit="N")
+    (run / "metadata.json").write_text(json.dumps(meta), encoding="utf-8")
+    page = report.render_report(run).read_text(encoding="utf-8")
+    assert "forces N (for the thickness of 100 mm)" in page
+    assert "all in N mm (for the thickness of 100 mm)" in page
+    assert "per mm of thickness" not in page
+    page1 = report.render_report(write_run(tmp_path / "thin")).read_text(encoding="utf-8")
+    assert "forces N/mm (per mm of thickness)" in page1

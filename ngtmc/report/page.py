@@ -107,6 +107,16 @@ def _mesh_rows(mesh: dict) -> list[dict]:
     return rows
 
 
+def thickness_phrase(thickness_mm) -> str:
+    """What the forces and energies of a run are for: in 2D (a thickness is recorded) "per mm of
+    thickness" when the thickness is 1 mm, else "for the thickness of T mm" (the whole specimen);
+    empty in 3D."""
+    if thickness_mm is None:
+        return ""
+    t = float(thickness_mm)
+    return "per mm of thickness" if abs(t - 1.0) < 1e-12 else f"for the thickness of {t:g} mm"
+
+
 def render_report(run_dir, output=None) -> Path:
     """Render the HTML report of one run directory.
 
@@ -129,6 +139,7 @@ def render_report(run_dir, output=None) -> Path:
     cases = _case_list(meta)
     styles = _case_style(cases)
     fu = meta.get("force_unit") or "N"
+    per_thickness = thickness_phrase(meta.get("thickness_mm"))
     study = str(meta.get("study", ""))
     has_hist = bool(len(history)) and history["load"].notna().any()
     features = run_features(meta, history, snapshots)
@@ -243,7 +254,7 @@ def render_report(run_dir, output=None) -> Path:
             "u" if "ndof_u" in mesh or "ndof_alpha" in mesh else ""),
         "features": features, "overrides": overrides_text(meta),
         "wall_time": fmt_duration(meta.get("wall_time_s")),
-        "thickness": fmt_u(meta.get("thickness_mm"), "mm"), "force_unit": fu,
+        "thickness": fmt_u(meta.get("thickness_mm"), "mm"), "force_unit": fu, "per_thickness": per_thickness,
         "cases": cases, "styles": styles, "has_history": has_hist,
         "n_rows": int(len(history)),
         "references": [r for r in meta.get("references") or [] if isinstance(r, dict)],
