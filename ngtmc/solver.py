@@ -273,7 +273,14 @@ class Solver:
         and their committed copies, are the caller's to transfer (:mod:`ngtmc.adapt`); the
         committed arrays are resized here only when their length no longer fits (zeros)."""
         self.mesh_generation += 1
+        if self._variable_order:
+            # NGSolve trap: right after a refinement, per-node orders set before the space's next
+            # Update are undone by it (the three-point bending kept order 2 on every edge: 17026
+            # instead of 9866 u dofs); so Update first, then set the orders, then Update again
+            self.fes_u.Update()
         self._apply_orders()
+        if self._variable_order:
+            self.fes_u.Update()
         self.u.Update()
         self._free_dofs()
         self.rho.vec.FV().NumPy()[:] = self.scene.element_density()

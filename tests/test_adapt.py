@@ -375,3 +375,37 @@ def test_coupled_newton_follows_the_refined_mesh_without_a_rebuild():
     np.testing.assert_allclose(out["kept"][1], out["fresh"][1], rtol=0, atol=1e-12 * np.abs(out["fresh"][1]).max())
     s.alpha.vec.FV().NumPy()[:] = s.alpha_committed
     assert c.solve(0.03).converged
+
+
+def test_refined_space_keeps_order_one_outside_the_regulariser():
+    """The NGSolve trap behind Solver.mesh_changed: right after a refinement, per-node orders set
+    before the space's next Update are undone by that Update (on the three-point bending from a
+    coarse band every edge kept order 2: 17026 instead of 9866 u dofs, silently). After a
+    refinement the solver's displacement space has exactly the dofs of a solver built afresh on
+    the refined mesh (order 2 only in the void), and the bare sequence (orders, then Update) is
+    still undone, so the trap is there to be avoided."""
+    from ngtmc.discretisation import lower_order_outside
+    from ngtmc.study import load_study, study_parameters
+    mod = load_study("three_point_bending")
+    _, p = study_parameters(mod, "quick", {"h_band": 0.06})
+    scene = adapt.private_scene(mod.build_scene(p))
+    s = ngtmc.Solver(scene, compile=False)
+    band = np.array([el.mat == "band" for el in s.mesh.Elements(ngs.VOL)])
+    marked = band & (np.random.default_rng(0).uniform(size=s.mesh.ne) < 0.2)
+    assert marked.sum() > 20
+    adapt.refine(s, marked)
+    fresh = ngtmc.Solver(dataclasses.replace(s.scene, mesh=_copy_mesh(s.mesh), _checked=False), compile=False)
+    assert s.fes_u.ndof == fresh.fes_u.ndof
+    # the trap itself, on a second copy of the coarse scene
+    bare = adapt.private_scene(mod.build_scene(p))
+    fes = ngs.VectorH1(bare.mesh, order=2)
+    lower_order_outside(fes, bare.mesh, "void")
+    fes.Update()
+    mesh = bare.mesh
+    for el in mesh.Elements(ngs.VOL):
+        mesh.SetRefinementFlag(el, bool(marked[el.nr]))
+    mesh.Refine()
+    mesh.Curve(2)
+    lower_order_outside(fes, mesh, "void", order=2)
+    fes.Update()
+    assert fes.ndof > 1.5 * fresh.fes_u.ndof
