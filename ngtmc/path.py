@@ -234,17 +234,12 @@ class DissipationPath:
                     info["t_new"] = t_new
                 return ok, info
             slow = dD_small < 0.25 * dD  # slow growth: try displacement steps again next
-        if r.converged:
-            H_trial = s.trial_history()
-            if np.all(np.isfinite(H_trial)):
-                info["H_trial"] = H_trial
-                info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
-                self.dissipation_steps += 1
-                self.dissipating = not slow
-                self._last_kind = "dissipation"
-                self._last_dD = dD_small if dD_small is not None else dD
-                return True, info
-            r.message = "history not finite (J <= 0 at a history point)"
+        if self._converged_dissipation(r, info, t0, t1):
+            self.dissipation_steps += 1
+            self.dissipating = not slow
+            self._last_kind = "dissipation"
+            self._last_dD = dD_small if dD_small is not None else dD
+            return True, info
         s.set_state(keep)
         out = self.coupled.load_out_of_bounds
         past_end = out is not None and direction * (out - l_b) > 0
@@ -258,16 +253,29 @@ class DissipationPath:
         info["message"] = f"dissipation step of {dD:.4g} N mm: {r.message}"
         return False, info
 
-    def mesh_changed(self, coupled, before: dict):
-        """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`): ``coupled`` is the
-        coupled Newton rebuilt on the refined mesh, ``before`` the state before the step (the last
-        accepted one) transferred to it. The secant predictor restarts from that state (the state
+    def _converged_dissipation(self, r, info: dict, t0: float, t1: float) -> bool:
+        """Whether the dissipation solve ``r`` ended in an acceptable state: converged with a finite
+        trial history. If so, ``info`` gets that history and the pseudo-time of the load found
+        (on the segment from ``t0`` to ``t1``); if not, ``r.message`` says why."""
+        if not r.converged:
+            return False
+        H_trial = self.sim.solver.trial_history()
+        if not np.all(np.isfinite(H_trial)):
+            r.message = "history not finite (J <= 0 at a history point)"
+            return False
+        info["H_trial"] = H_trial
+        info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
+        return True
+
+    def mesh_changed(self, before: dict):
+        """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`, the coupled Newton
+        having followed it): ``before`` is the state before the step (the last accepted one)
+        transferred to the refined mesh. The secant predictor restarts from that state (the state
         before it lives on the old mesh), and the dissipation of the last accepted state is taken
         again on the refined mesh (the same P1 field, so the same value to round-off)."""
-        self.coupled = coupled
         self.x_n = (np.array(before["u"], dtype=float), np.array(before["alpha"], dtype=float))
         self.x_prev, self.load_prev = None, None
-        self.d_prev = coupled.dissipation(np.asarray(before["alpha_committed"], dtype=float))
+        self.d_prev = self.coupled.dissipation(np.asarray(before["alpha_committed"], dtype=float))
 
     def resolve(self, load: float, t_new: float):
         """Solve the step just converged on the old mesh again on the refined one (predictor-
@@ -290,13 +298,8 @@ class DissipationPath:
         keep = s.get_state()
         r = self.coupled.solve(load, dissipation=self._last_dD, load_bounds=(lo, hi))
         sim._add(info, r)
-        if r.converged:
-            H_trial = s.trial_history()
-            if np.all(np.isfinite(H_trial)):
-                info["H_trial"] = H_trial
-                info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
-                return True, info
-            r.message = "history not finite (J <= 0 at a history point)"
+        if self._converged_dissipation(r, info, t0, t1):
+            return True, info
         s.set_state(keep)
         info["message"] = f"dissipation step of {self._last_dD:.4g} N mm on the refined mesh: {r.message}"
         return False, info

@@ -497,20 +497,18 @@ class Simulation:
             marked = amr.mark(s, self.adapt, info.get("H_trial"))
             if not marked.any():
                 break
-            load_step = s.load   # the load the step reached (path following solves for it)
             record, (saved,) = amr.refine(s, marked, [saved])
             self.refinements.append((self.step + 1, record))
             if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
                 self.coupled.mesh_changed()
-            u_pred = s.u.vec.FV().NumPy().copy()
-            a_pred = s.alpha.vec.FV().NumPy().copy() if s.alpha is not None else None
+            pred = s.get_state()   # the refined solution (its load: path following solves for it)
             s.set_state(saved)
-            s.u.vec.FV().NumPy()[:] = u_pred
+            s.u.vec.FV().NumPy()[:] = pred["u"]
             if self._path is not None:
                 # the same kind of step (dissipation dD, or displacement) from the refined solution
-                self._path.mesh_changed(self.coupled, saved)
-                s.alpha.vec.FV().NumPy()[:] = a_pred
-                ok, info = self._path.resolve(load_step, info.get("t_new", t_new))
+                self._path.mesh_changed(saved)
+                s.alpha.vec.FV().NumPy()[:] = pred["alpha"]
+                ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new))
             else:
                 ok, info = self._attempt(t_new)
             for k in totals:
