@@ -231,10 +231,19 @@ class Solver:
     def _apply_orders(self):
         """Order 1 outside the regulariser's regions when the order varies per element
         (:func:`~ngtmc.discretisation.lower_order_outside`); after a refinement every node is set
-        again (NGSolve gives new nodes the full order)."""
-        if self._variable_order:
-            lower_order_outside(self.fes_u, self.mesh, _regex(_names(self.scene.regulariser.regions)),
-                                order=self.order if self.mesh_generation else None)
+        again (NGSolve gives new nodes the full order). NGSolve trap: right after a refinement,
+        orders set before the space's next Update are undone by it (the three-point bending kept
+        order 2 on every edge: 17026 instead of 9866 u dofs), so a refined space is updated, its
+        orders set, and updated again."""
+        if not self._variable_order:
+            return
+        refined = self.mesh_generation > 0
+        if refined:
+            self.fes_u.Update()
+        lower_order_outside(self.fes_u, self.mesh, _regex(_names(self.scene.regulariser.regions)),
+                            order=self.order if refined else None)
+        if refined:
+            self.fes_u.Update()
 
     def _free_dofs(self):
         """Free-dof mask of the displacement: the space's Dirichlet boundaries, and the vertex
@@ -273,14 +282,7 @@ class Solver:
         and their committed copies, are the caller's to transfer (:mod:`ngtmc.adapt`); the
         committed arrays are resized here only when their length no longer fits (zeros)."""
         self.mesh_generation += 1
-        if self._variable_order:
-            # NGSolve trap: right after a refinement, per-node orders set before the space's next
-            # Update are undone by it (the three-point bending kept order 2 on every edge: 17026
-            # instead of 9866 u dofs); so Update first, then set the orders, then Update again
-            self.fes_u.Update()
         self._apply_orders()
-        if self._variable_order:
-            self.fes_u.Update()
         self.u.Update()
         self._free_dofs()
         self.rho.vec.FV().NumPy()[:] = self.scene.element_density()
