@@ -41,7 +41,8 @@ the same dD (its load may land elsewhere) or a displacement step to the same loa
 refined solution (:meth:`ngtmc.path.DissipationPath.resolve`); the secant predictor restarts
 from the state before the step.
 
-Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); the adjoint of :mod:`ngtmc.sensitivities` refuses a run whose mesh changed; a run folder
+Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); the adjoint of
+:mod:`ngtmc.sensitivities` refuses a run whose mesh changed; a run folder
 (``simulate(out_dir=...)``) does not take ``adapt`` yet (snapshots of a changing mesh).
 
 Units: mm.
