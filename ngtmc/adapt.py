@@ -41,9 +41,12 @@ the same dD (its load may land elsewhere) or a displacement step to the same loa
 refined solution (:meth:`ngtmc.path.DissipationPath.resolve`); the secant predictor restarts
 from the state before the step.
 
+A run is resumed on its refined mesh by :func:`replay`: the elements marked in each refinement
+are recorded (:class:`RefinementRecord`), and NGSolve's bisection of the same marks on the same
+initial mesh gives the same mesh and dof numbering again.
+
 Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); the adjoint of
-:mod:`ngtmc.sensitivities` refuses a run whose mesh changed; a run folder
-(``simulate(out_dir=...)``) does not take ``adapt`` yet (snapshots of a changing mesh).
+:mod:`ngtmc.sensitivities` refuses a run whose mesh changed.
 
 Units: mm.
 """
@@ -59,7 +62,7 @@ import ngsolve as ngs
 
 from .materials import check_number
 
-__all__ = ["Adaptivity", "mark", "refine", "RefinementRecord", "private_scene", "transfer_history"]
+__all__ = ["Adaptivity", "mark", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
 
 
 @dataclass(frozen=True)
@@ -109,13 +112,21 @@ class Adaptivity:
 
 @dataclass
 class RefinementRecord:
-    """One refinement: elements marked, elements and displacement dofs before and after."""
+    """One refinement: elements marked, elements and displacement dofs before and after, and the
+    numbers of the marked elements (in the mesh before the refinement), from which :func:`replay`
+    makes the same mesh again."""
 
     marked: int
     elements_before: int
     elements_after: int
     dofs_before: int
     dofs_after: int
+    elements: np.ndarray | None = None
+
+    def as_dict(self) -> dict:
+        """The counts (JSON); the marked elements are :attr:`elements`."""
+        return {k: int(getattr(self, k)) for k in ("marked", "elements_before", "elements_after",
+                                                     "dofs_before", "dofs_after")}
 
 
 def private_scene(scene):
@@ -263,11 +274,6 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
     marked = np.asarray(marked, dtype=bool)
     if marked.shape != (ne_old,):
         raise ValueError(f"marked has shape {marked.shape}; the mesh has {ne_old} elements")
-    scene = solver.scene
-    per_element_density = scene.density is not None and not isinstance(scene.density, Mapping)
-    rho_old = solver.rho.vec.FV().NumPy().copy()
-    curve = mesh.GetCurveOrder()
-
     aux = _carrier_space(solver)
     tmp_u = ngs.GridFunction(solver.fes_u)
 
@@ -290,15 +296,7 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
             a_carriers += [carry_a(st["alpha"]), carry_a(st["alpha_committed"])]
     H_old = [solver.H_committed] + [st["H"] for st in states]
 
-    for el in mesh.Elements(ngs.VOL):
-        mesh.SetRefinementFlag(el, bool(marked[el.nr]))
-    mesh.Refine()
-    if curve > 1:
-        mesh.Curve(curve)
-    anc = _ancestors(mesh, ne_old)
-    if per_element_density:
-        scene.density = rho_old[anc]
-    solver.mesh_changed()
+    anc = _refine_mesh(solver, marked)
 
     npts = solver.irs.ndof // mesh.ne
     new_H = [transfer_history(h, anc, ne_old, npts) for h in H_old]
@@ -321,5 +319,48 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
             new["alpha"] = a_carriers[1 + 2 * k].vec.FV().NumPy().copy()
             new["alpha_committed"] = a_carriers[2 + 2 * k].vec.FV().NumPy().copy()
         out.append(new)
-    record = RefinementRecord(int(marked.sum()), ne_old, mesh.ne, dofs_old, solver.fes_u.ndof)
+    record = RefinementRecord(int(marked.sum()), ne_old, mesh.ne, dofs_old, solver.fes_u.ndof,
+                              np.flatnonzero(marked).astype(np.int64))
     return record, out
+
+
+def _refine_mesh(solver, marked: np.ndarray) -> np.ndarray:
+    """Bisect the marked elements of the solver's mesh (NGSolve), curve it again at its order, let
+    a density given per element follow the parents, and bring the solver to the new mesh
+    (:meth:`~ngtmc.solver.Solver.mesh_changed`). Returns the ancestor of every new element in the
+    mesh before (:func:`_ancestors`). The one place where a run's mesh is refined."""
+    mesh = solver.mesh
+    ne_old = mesh.ne
+    scene = solver.scene
+    per_element_density = scene.density is not None and not isinstance(scene.density, Mapping)
+    rho_old = solver.rho.vec.FV().NumPy().copy()
+    curve = mesh.GetCurveOrder()
+    for el in mesh.Elements(ngs.VOL):
+        mesh.SetRefinementFlag(el, bool(marked[el.nr]))
+    mesh.Refine()
+    if curve > 1:
+        mesh.Curve(curve)
+    anc = _ancestors(mesh, ne_old)
+    if per_element_density:
+        scene.density = rho_old[anc]
+    solver.mesh_changed()
+    return anc
+
+
+def replay(solver, elements: list) -> None:
+    """Refine the solver's mesh as a run did: ``elements[k]`` are the numbers of the elements
+    marked in its k-th refinement (:attr:`RefinementRecord.elements`). The mesh must be the run's
+    initial one (a fresh solver of the same scene); NGSolve's bisection is deterministic, so the
+    mesh, its element numbers and the dof numbering come out as in the run, and a state of the run
+    (:meth:`~ngtmc.solver.Solver.get_state`) fits. Field values are not transferred: the caller
+    sets the state afterwards. Raises ValueError when the marks do not fit the mesh."""
+    _carrier_space(solver)   # made on the first level, as in the run, for the refinements to come
+    for k, idx in enumerate(elements):
+        idx = np.asarray(idx, dtype=np.int64)
+        ne = solver.mesh.ne
+        if idx.size and (idx.min() < 0 or idx.max() >= ne):
+            raise ValueError(f"refinement {k + 1} of the recorded run marks element {int(idx.max())}, but the mesh "
+                             f"has {ne} elements: the recorded refinements do not belong to this mesh")
+        marked = np.zeros(ne, dtype=bool)
+        marked[idx] = True
+        _refine_mesh(solver, marked)

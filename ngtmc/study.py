@@ -44,6 +44,8 @@ SOLVER_PARAMETERS = {
     "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, about 3.4 s to compile per expression; "
                              "falls back to 'symbolic' without a C++ compiler), 'symbolic', 'none', or 'auto' "
                              "('real' on meshes of 5000 elements or more)"),
+    "h_crack": (0.0, "mm", "adaptive refinement during the run (ngtmc.Adaptivity): target element size where the crack "
+                           "is or is about to be, for example l0/4; 0: none (the mesh as the resolution gives it)"),
 }
 _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
@@ -58,7 +60,18 @@ def simulation_options(p: dict) -> dict:
         raise StudyError(f"scheme = {scheme!r} is not one of {', '.join(SCHEMES)}")
     if compile_ not in _COMPILE:
         raise StudyError(f"compile = {compile_!r} is not one of {', '.join(_COMPILE)}")
-    return {"scheme": scheme, "compile": _COMPILE[compile_]}
+    out = {"scheme": scheme, "compile": _COMPILE[compile_]}
+    h_crack = p.get("h_crack", SOLVER_PARAMETERS["h_crack"][0])
+    try:
+        h_crack = float(h_crack)
+    except (TypeError, ValueError):
+        raise StudyError(f"h_crack = {h_crack!r} must be a length in mm (0: no adaptive refinement)") from None
+    if h_crack < 0 or h_crack != h_crack:
+        raise StudyError(f"h_crack = {h_crack!r} mm must be >= 0 (0: no adaptive refinement)")
+    if h_crack > 0:
+        from .adapt import Adaptivity
+        out["adapt"] = Adaptivity(h_crack=h_crack)
+    return out
 
 
 @dataclass

@@ -111,7 +111,8 @@ def _case_list(meta: dict) -> list[dict]:
         if isinstance(c, dict):
             name = str(c.get("name", f"case{i}"))
             cases.append({"name": name, "label": str(c.get("label") or name),
-                          "parameters": c.get("parameters") or {}})
+                          "parameters": c.get("parameters") or {},
+                          **{k: c[k] for k in ("mesh_final", "refinements") if k in c}})
         else:
             cases.append({"name": str(c), "label": str(c), "parameters": {}})
     return cases

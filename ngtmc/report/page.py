@@ -18,6 +18,19 @@ from .figures import (
     _fig_step_size, _fig_wf_alpha, _level_colors, _same_mesh, fig_study, mesh_payload)
 
 
+
+def snapshot_group_label(name: str, snap: dict, cases: list[dict]) -> str:
+    """Label of an entry of ``snapshots.npz`` that is not a case: a group ``<case>@<g>`` of the
+    snapshots of a case whose mesh changed (adaptive refinement), named after its case, mesh
+    number and size; any other name as it is."""
+    base, sep, g = name.rpartition("@")
+    label = next((c["label"] for c in cases if c["name"] == base), None) if sep else None
+    if label is None or not g.isdigit():
+        return name
+    tri = snap.get("triangles") if isinstance(snap, dict) else None
+    nt = int(np.shape(tri)[0]) if tri is not None and np.ndim(tri) == 2 else None
+    return f"{label}, mesh {g}" + (f" ({nt} elements)" if nt is not None else "")
+
 def _env():
     import jinja2
     loader = jinja2.FileSystemLoader(str(Path(__file__).resolve().parent.parent / "templates"))
@@ -107,6 +120,25 @@ def _mesh_rows(mesh: dict) -> list[dict]:
     return rows
 
 
+def _refined_mesh_rows(cases: list[dict]) -> list[dict]:
+    """Rows of the mesh table for the cases whose mesh was refined during the run (``mesh_final``
+    and ``refinements`` of their metadata): the mesh they ended on."""
+    rows = []
+    for c in cases:
+        m = c.get("mesh_final")
+        if not isinstance(m, dict):
+            continue
+        n = c.get("refinements")
+        head = f"{c.get('label') or c.get('name')}, after {n} refinements" if n else f"{c.get('label')}, at the end"
+        for key, label in (("n_elements", "elements"), ("ndof_u", "displacement dofs"),
+                           ("ndof_alpha", "phase-field dofs")):
+            if key in m:
+                rows.append({"label": f"{head}: {label}", "value": fmt(m[key])})
+        if "h_min" in m:
+            rows.append({"label": f"{head}: smallest element size h_min", "value": fmt_u(m["h_min"], "mm")})
+    return rows
+
+
 def thickness_phrase(thickness_mm) -> str:
     """What the forces and energies of a run are for: in 2D (a thickness is recorded) "per mm of
     thickness" when the thickness is 1 mm, else "for the thickness of T mm" (the whole specimen);
@@ -181,7 +213,7 @@ def render_report(run_dir, output=None) -> Path:
         n_vert = sum(int(np.shape(sn.get("vertices", ()))[0]) for sn in snapshots.values()
                      if isinstance(sn, dict) and np.ndim(sn.get("vertices", ())) == 2)
         frame_cap = max(2, min(MAX_FRAMES, MAX_VERTEX_FRAMES // max(n_vert, 1)))
-        for c in cases + [{"name": n, "label": n, "parameters": {}}
+        for c in cases + [{"name": n, "label": snapshot_group_label(n, snapshots[n], cases), "parameters": {}}
                           for n in snapshots if n not in {c["name"] for c in cases}]:
             snap = snapshots.get(c["name"])
             payload = mesh_payload(snap, frame_cap) if snap else None
@@ -246,7 +278,7 @@ def render_report(run_dir, output=None) -> Path:
         "created": fmt_date(created), "status": meta.get("status"),
         "banner": _status_banner(meta.get("status")),
         "versions": versions, "git_revision": meta.get("git_revision") or "–",
-        "parameters": _parameter_rows(meta.get("parameters")), "mesh_rows": _mesh_rows(mesh),
+        "parameters": _parameter_rows(meta.get("parameters")), "mesh_rows": _mesh_rows(mesh) + _refined_mesh_rows(cases),
         "n_elements": fmt(mesh.get("n_elements")),
         "ndof": fmt((mesh.get("ndof_u") or 0) + (mesh.get("ndof_alpha") or 0))
         if ("ndof_u" in mesh or "ndof_alpha" in mesh) else "–",

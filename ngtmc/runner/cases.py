@@ -75,7 +75,8 @@ class _Run(RunFolder):
                     ck = {"rows": [{k: v for k, v in r.items() if not (isinstance(v, float) and np.isnan(v))}
                                    for r in rows.drop(columns="case").to_dict("records")],
                           "results": recorded[case.name], "case_meta": cm,
-                          "snaparr": {k: v for k, v in old_snaps.items() if k.startswith(case.name + "__")}}
+                          "snaparr": {k: v for k, v in old_snaps.items()
+                                      if k.startswith((case.name + "__", case.name + "@"))}}
                     self.adopt(case, ck)
                     self.save_checkpoint(case, {"rows": ck["rows"]}, None, done=True)
                     self.progress.say(f"case {case.name}: no readable checkpoint; its completed results are "
@@ -211,6 +212,9 @@ class _Run(RunFolder):
             res["cpu_time_s"] = cm["cpu_time_s"] = time.process_time() - cpu0
             # where the time went (s) since this process started the case (see ngtmc.solver.TIMING_KEYS)
             res["time_split_s"] = {k: float(v) for k, v in sim.solver.timings.items()}
+            if sim.refinements:   # adaptive refinement: the mesh the case ended on
+                cm["mesh_final"] = {k_: v for k_, v in _mesh_info(sim.solver).items() if k_ != "displacement_order"}
+                cm["refinements"] = len(sim.refinements)
             if error:
                 res["error"] = error
             self.results[case.name] = res

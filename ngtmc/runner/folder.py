@@ -97,6 +97,9 @@ class RunFolder:
         names = [c.name for c in self.cases]
         if len(set(names)) != len(names):
             raise StudyError(f"study {mod.NAME!r}: case names are not unique: {names}")
+        bad = [n for n in names if "@" in n or "__" in n or not n]
+        if bad:   # snapshots.npz keys are {case}__{field}, and {case}@{g}__{field} for a refined mesh
+            raise StudyError(f"study {mod.NAME!r}: case names {bad} may contain neither '@' nor '__' (and not be empty)")
         self.force_unit: str | None = None      # of the first scene built (ngtmc.plugins.force_unit)
         self.thickness: float | None = None
         self.features: dict = {}                # what the scenes have (fracture, void, regulariser), for the report

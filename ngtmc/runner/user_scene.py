@@ -98,6 +98,13 @@ def _scene_parameters(scene, schedule, control, options: dict) -> dict:
     for k, v in options.items():
         if isinstance(v, (int, float, str, bool)):
             out[f"option.{k}"] = (v, "-", f"Simulation option {k}")
+    adapt = options.get("adapt")
+    if adapt is not None:
+        import dataclasses
+        units = {"h_crack": "mm", "h_void": "mm"}
+        for f in dataclasses.fields(adapt):
+            v = getattr(adapt, f.name)
+            out[f"adapt.{f.name}"] = (v, units.get(f.name, "-"), f"adaptive refinement (ngtmc.Adaptivity): {f.name}")
     return out
 
 
@@ -153,10 +160,6 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
     from . import _execute        # the run of a named study (ngtmc.runner)
     if out_dir is None:
         raise StudyError("run_scene needs out_dir, the run folder to write")
-    if options.get("adapt") is not None:
-        raise StudyError("adapt= (adaptive refinement) does not write a run folder so far: its snapshots, VTK "
-                         "series and checkpoints assume one mesh; run it in memory, ngtmc.simulate(scene, "
-                         "schedule, control, adapt=...) without out_dir")
     mod = scene_study(scene, schedule, control, name=name, title=title, summary=summary,
                       snapshot_loads=snapshot_loads, references=references, targets=targets, **options)
     run = _execute(mod, None, out_dir, None, report, resume, progress, threads, checkpoint_every,
