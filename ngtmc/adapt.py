@@ -15,8 +15,10 @@ Marked (and larger than their target size) are the elements
   ``h_crack``;
 * of the void (rho < 1/2) where J falls below ``J_threshold`` at a quadrature point (a squeezed
   third medium, under an indenter); target size ``h_void`` (None: no J indicator);
-* and ``buffer`` layers of neighbours (sharing a vertex) of those, with the target of their own
-  region, so that a crack tip that moves within a step stays on the fine mesh.
+* and ``buffer`` layers of neighbours (sharing a vertex) of those, and, with ``buffer_length``,
+  every element whose centroid lies within that distance of a marked element's centroid, with
+  the target of their own region, so that a crack tip that moves within a step stays on the fine
+  mesh (and, with a lookahead of a few l0, several steps go by without a refinement).
 
 The transfer to the refined mesh (:func:`refine`):
 
@@ -74,7 +76,9 @@ class Adaptivity:
     is refined (dimensionless, in (0, 1)). history_fraction: fraction of H_c = Gc / (6 l0) above
     which an element is refined (in (0, 1]). h_void: target size in the void for the J indicator,
     mm (None: no refinement of the void). J_threshold: J below which a void element is refined
-    (in (0, 1)). buffer: layers of neighbours refined with a marked element (>= 0). max_rounds:
+    (in (0, 1)). buffer: layers of neighbours refined with a marked element (>= 0). buffer_length:
+    elements whose centroid is within this distance (mm, >= 0) of a marked element's are refined
+    too (0: none; a lookahead ahead of the crack tip). max_rounds:
     refinement rounds (each followed by a re-solve) after one step at most (>= 1).
 
     Defaults measured on the notched plate of benchmarks/adaptivity.py (docs/adaptivity.md):
@@ -89,6 +93,7 @@ class Adaptivity:
     J_threshold: float = 0.5
     buffer: int = 1
     max_rounds: int = 10
+    buffer_length: float = 0.0
 
     def __post_init__(self):
         check_number("Adaptivity h_crack", self.h_crack, "mm")
@@ -106,6 +111,9 @@ class Adaptivity:
             raise ValueError(f"Adaptivity history_fraction = {self.history_fraction!r} is outside (0, 1]")
         if int(self.buffer) != self.buffer or self.buffer < 0:
             raise ValueError(f"Adaptivity buffer = {self.buffer!r} must be an integer >= 0")
+        check_number("Adaptivity buffer_length", self.buffer_length, "mm")
+        if not (math.isfinite(self.buffer_length) and self.buffer_length >= 0):
+            raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r} mm must be finite and >= 0")
         if int(self.max_rounds) != self.max_rounds or self.max_rounds < 1:
             raise ValueError(f"Adaptivity max_rounds = {self.max_rounds!r} must be an integer >= 1")
 
@@ -210,7 +218,20 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None) -> np.ndarray:
         if not flags.any():
             break
         flags = _neighbours(mesh, flags)
+    if adapt.buffer_length > 0 and flags.any():
+        flags = _within(mesh, flags, adapt.buffer_length)
     return flags & (solver.h > target * (1.0 + 1e-9))
+
+
+def _within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:
+    """Elements whose centroid lies within ``distance`` (mm) of a flagged element's centroid (the
+    flagged ones included)."""
+    from scipy.spatial import cKDTree
+    nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    xy = np.asarray(mesh.ngmesh.Coordinates())[:, :2]
+    c = xy[nodes].mean(axis=1)
+    d, _ = cKDTree(c[flags]).query(c, distance_upper_bound=distance)
+    return flags | np.isfinite(d)
 
 
 def _ancestors(mesh, ne_old: int) -> np.ndarray:
@@ -266,8 +287,9 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
 
     The solver's fields (u, alpha, committed alpha and history) are transferred in place (see the
     module docstring); ``states``: further states of :meth:`~ngtmc.solver.Solver.get_state` (for
-    example the one before the step) to transfer, returned as new dicts in the same order.
-    Returns (record, transferred states)."""
+    example the one before the step) to transfer, returned as new dicts in the same order; a state
+    may hold only some of the fields (``u`` at least; ``alpha``, ``alpha_committed``, ``H``,
+    ``load``), for example a predictor's (u, alpha). Returns (record, transferred states)."""
     mesh = solver.mesh
     ne_old = mesh.ne
     dofs_old = solver.fes_u.ndof
@@ -285,16 +307,18 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
 
     u_carriers = [carry_u(solver.u.vec.FV().NumPy())] + [carry_u(st["u"]) for st in states]
     del tmp_u
-    a_carriers = []
+    a_carriers = {}
     if solver.alpha is not None:
         def carry_a(values):
             g = ngs.GridFunction(solver.fes_a)
             g.vec.FV().NumPy()[:] = values
             return g
-        a_carriers = [carry_a(solver.alpha_committed)]
-        for st in states:
-            a_carriers += [carry_a(st["alpha"]), carry_a(st["alpha_committed"])]
-    H_old = [solver.H_committed] + [st["H"] for st in states]
+        a_carriers[-1, "alpha_committed"] = carry_a(solver.alpha_committed)
+        for k, st in enumerate(states):
+            for key in ("alpha", "alpha_committed"):
+                if key in st:
+                    a_carriers[k, key] = carry_a(st[key])
+    H_old = [solver.H_committed] + [st["H"] for st in states if "H" in st]
 
     anc = _refine_mesh(solver, marked)
 
@@ -312,12 +336,17 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
     solver.H.vec.FV().NumPy()[:] = new_H[0]
     out = []
     if solver.alpha is not None:
-        solver.alpha_committed = a_carriers[0].vec.FV().NumPy().copy()
+        solver.alpha_committed = a_carriers[-1, "alpha_committed"].vec.FV().NumPy().copy()
+    H_next = iter(new_H[1:])
     for k, st in enumerate(states):
-        new = {"u": new_u[k + 1], "H": new_H[k + 1], "load": np.array(st["load"])}
-        if solver.alpha is not None:
-            new["alpha"] = a_carriers[1 + 2 * k].vec.FV().NumPy().copy()
-            new["alpha_committed"] = a_carriers[2 + 2 * k].vec.FV().NumPy().copy()
+        new = {"u": new_u[k + 1]}
+        if "H" in st:
+            new["H"] = next(H_next)
+        if "load" in st:
+            new["load"] = np.array(st["load"])
+        for key in ("alpha", "alpha_committed"):
+            if (k, key) in a_carriers:
+                new[key] = a_carriers[k, key].vec.FV().NumPy().copy()
         out.append(new)
     record = RefinementRecord(int(marked.sum()), ne_old, mesh.ne, dofs_old, solver.fes_u.ndof,
                               np.flatnonzero(marked).astype(np.int64))

@@ -267,14 +267,25 @@ class DissipationPath:
         info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
         return True
 
-    def mesh_changed(self, before: dict):
+    def predictor_states(self) -> list[dict]:
+        """The accepted state before the last one, (u, alpha), for the secant predictor, as a
+        partial state that :func:`ngtmc.adapt.refine` transfers to a refined mesh ([] if none)."""
+        if self.x_prev is None:
+            return []
+        return [{"u": self.x_prev[0], "alpha": self.x_prev[1]}]
+
+    def mesh_changed(self, before: dict, previous: list[dict] = ()):
         """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`, the coupled Newton
         having followed it): ``before`` is the state before the step (the last accepted one)
-        transferred to the refined mesh. The secant predictor restarts from that state (the state
-        before it lives on the old mesh), and the dissipation of the last accepted state is taken
-        again on the refined mesh (the same P1 field, so the same value to round-off)."""
+        transferred to the refined mesh, ``previous`` the :meth:`predictor_states` transferred
+        with it. The secant predictor goes on through those two states (without ``previous`` it
+        restarts from ``before``), and the dissipation of the last accepted state is taken again on
+        the refined mesh (the same P1 field, so the same value to round-off)."""
         self.x_n = (np.array(before["u"], dtype=float), np.array(before["alpha"], dtype=float))
-        self.x_prev, self.load_prev = None, None
+        if previous and self.x_prev is not None:
+            self.x_prev = (np.array(previous[0]["u"], dtype=float), np.array(previous[0]["alpha"], dtype=float))
+        else:
+            self.x_prev, self.load_prev = None, None
         self.d_prev = self.coupled.dissipation(np.asarray(before["alpha_committed"], dtype=float))
 
     def resolve(self, load: float, t_new: float):

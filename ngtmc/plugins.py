@@ -7,8 +7,9 @@ as ``plugin(simulation, row)`` on each (``Simulation.run(callbacks=...)`` does t
 study (:func:`ngtmc.run_study`) and by a user's own scene (``ngtmc.simulate(..., out_dir=...)``):
 
 * :class:`Progress`: the one progress printer (also behind ``Simulation(progress=True)``): step,
-  load (mm), step size (mm), force with its unit, Newton iterations, cut-backs, the share of the
-  load path done and an estimate of the time left from the recent pace;
+  load (mm), step size (mm), force with its unit, Newton iterations, cut-backs, the elements of
+  a mesh refined during the run, the share of the load path done and an estimate of the time left
+  from the recent pace;
 * :class:`SnapshotOutput`: fields at the chosen loads (``snapshots.npz`` and ``vtk/``);
 * :class:`CheckpointOutput`: a checkpoint and the run's files every so many steps or seconds;
 * :class:`RowCallbacks`: user functions ``f(simulation, row)``, the row carrying its ``case``;
@@ -99,9 +100,10 @@ class Progress(Plugin):
                 eta = f", about {left[0]:.0f} s left (estimate from the pace of the last {left[1]:.0f} s)"
         alpha = row.get("max_alpha")
         alpha = f"  max alpha {alpha:.3f}" if alpha is not None and getattr(sim.solver, "alpha", None) is not None else ""
+        mesh = f"  {row['elements']} elements" if "elements" in row else ""   # adaptive refinement
         return (f"{self.prefix} step {row['step']:5d}  load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  "
                 f"force {row['force']:.5g} {self.unit}{alpha}  Newton {row['newton_iterations']}  "
-                f"cut-backs {row['cutbacks']}  {100 * frac:5.1f} % of the load path  {el:.0f} s{eta}")
+                f"cut-backs {row['cutbacks']}{mesh}  {100 * frac:5.1f} % of the load path  {el:.0f} s{eta}")
 
     def step(self, sim, row: dict):
         if not self.enabled:

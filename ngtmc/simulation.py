@@ -497,7 +497,8 @@ class Simulation:
             marked = amr.mark(s, self.adapt, info.get("H_trial"))
             if not marked.any():
                 break
-            record, (saved,) = amr.refine(s, marked, [saved])
+            previous = self._path.predictor_states() if self._path is not None else []
+            record, (saved, *previous) = amr.refine(s, marked, [saved, *previous])
             self.refinements.append((self.step + 1, record))
             if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
                 self.coupled.mesh_changed()
@@ -506,7 +507,7 @@ class Simulation:
             s.u.vec.FV().NumPy()[:] = pred["u"]
             if self._path is not None:
                 # the same kind of step (dissipation dD, or displacement) from the refined solution
-                self._path.mesh_changed(saved)
+                self._path.mesh_changed(saved, previous)
                 s.alpha.vec.FV().NumPy()[:] = pred["alpha"]
                 ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new))
             else:

@@ -69,3 +69,23 @@ def notched_plate(maxh=0.08, h_band=0.02, l0=0.04, notch=0.3, **kw):
                        supports=[ngtmc.Support("bottom", x=True, y=True)],
                        load=ngtmc.DisplacementLoad("top", "y", hold_tangential=True),
                        fracture_regions="plate", **kw)
+
+
+def sheared_plate(maxh=0.1, l0=0.05, notch=0.5, **kw):
+    """Single-edge-notched square 1 x 1 in shear (the shear test of Miehe, Hofacker and Welschinger
+    2010, CMAME 199, 2765-2778, Sec. 4.2, at a larger l0): a slit from the left edge to
+    (notch, 0.5), bottom clamped, top moved in x with y held. The crack leaves the notch tip
+    curving down towards the bottom right corner: no band can be placed along it beforehand.
+    E = 210e3 MPa, nu = 0.3, Gc = 2.7 N/mm; mm."""
+    half_w = 0.005
+    plate = Rectangle(1.0, 1.0).Face()
+    slit = MoveTo(-0.01, 0.5 - half_w).Rectangle(notch + 0.01, 2 * half_w).Face()
+    body = plate - slit
+    body.faces.name = "plate"
+    body.edges.Min(Y).name = "bottom"
+    body.edges.Max(Y).name = "top"
+    mesh = ngs.Mesh(OCCGeometry(body, dim=2).GenerateMesh(maxh=maxh))
+    return ngtmc.Scene(mesh, {"plate": ngtmc.Material(210e3, 0.3, 2.7, l0)},
+                       supports=[ngtmc.Support("bottom", x=True, y=True)],
+                       load=ngtmc.DisplacementLoad("top", "x", hold_tangential=True),
+                       fracture_regions="plate", **kw)
