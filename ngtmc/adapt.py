@@ -15,10 +15,12 @@ Marked (and larger than their target size) are the elements
   ``h_crack``;
 * of the void (rho < 1/2) where J falls below ``J_threshold`` at a quadrature point (a squeezed
   third medium, under an indenter); target size ``h_void`` (None: no J indicator);
-* and ``buffer`` layers of neighbours (sharing a vertex) of those, and, with ``buffer_length``,
-  every element whose centroid lies within that distance of a marked element's centroid, with
-  the target of their own region, so that a crack tip that moves within a step stays on the fine
-  mesh (and, with a lookahead of a few l0, several steps go by without a refinement).
+* and ``buffer`` layers of neighbours (sharing a vertex) of those, with the target of their own
+  region, so that a crack tip that moves within a step stays on the fine mesh;
+* with ``buffer_length`` (a lookahead), when any of those is still to be refined, also every
+  element whose centroid lies within that distance of theirs: a hysteresis, so that a running
+  crack moves about that far before the next refinement (without it, a crack that moves by a
+  fraction of an element per step triggers a refinement, and a re-solve, at almost every step).
 
 The transfer to the refined mesh (:func:`refine`):
 
@@ -218,9 +220,12 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None) -> np.ndarray:
         if not flags.any():
             break
         flags = _neighbours(mesh, flags)
-    if adapt.buffer_length > 0 and flags.any():
+    coarse = solver.h > target * (1.0 + 1e-9)
+    if adapt.buffer_length > 0 and (flags & coarse).any():
+        # hysteresis: only when the indicator reaches an element still to refine is the zone within
+        # buffer_length refined too; the crack then runs about that far before the next refinement
         flags = _within(mesh, flags, adapt.buffer_length)
-    return flags & (solver.h > target * (1.0 + 1e-9))
+    return flags & coarse
 
 
 def _within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:

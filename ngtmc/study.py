@@ -46,6 +46,9 @@ SOLVER_PARAMETERS = {
                              "('real' on meshes of 5000 elements or more)"),
     "h_crack": (0.0, "mm", "adaptive refinement during the run (ngtmc.Adaptivity): target element size where the crack "
                            "is or is about to be, for example l0/4; 0: none (the mesh as the resolution gives it)"),
+    "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
+                                 "too (Adaptivity.buffer_length), so that a running crack tip stays on the fine mesh "
+                                 "for several steps"),
 }
 _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
@@ -70,7 +73,10 @@ def simulation_options(p: dict) -> dict:
         raise StudyError(f"h_crack = {h_crack!r} mm must be >= 0 (0: no adaptive refinement)")
     if h_crack > 0:
         from .adapt import Adaptivity
-        out["adapt"] = Adaptivity(h_crack=h_crack)
+        try:
+            out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)))
+        except (TypeError, ValueError) as e:
+            raise StudyError(str(e)) from None
     return out
 
 

@@ -1,6 +1,7 @@
-"""The refinement indicator's lookahead (ngtmc.Adaptivity.buffer_length): marked are exactly the
-elements larger than their target whose centroid lies within the given distance of an element the
-indicator marks by itself."""
+"""The refinement indicator's lookahead (ngtmc.Adaptivity.buffer_length), a hysteresis: when the
+indicator marks an element still to refine, marked are exactly the elements larger than their
+target whose centroid lies within the given distance of an element the indicator marks by itself;
+when it marks none, nothing is marked."""
 import numpy as np
 import pytest
 
@@ -24,6 +25,15 @@ def test_lookahead_marks_every_element_within_its_distance():
     expected = (dist <= 0.15) & (s.h > 0.03 * (1 + 1e-9))
     np.testing.assert_array_equal(ahead, expected)
     assert ahead.sum() > base.sum()
+    # after the refinement of what the indicator alone marks, the lookahead is not triggered
+    adapt.refine(s, base)
+    for _ in range(5):
+        base = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0))
+        if not base.any():
+            break
+        adapt.refine(s, base)
+    assert not base.any()
+    assert not adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0, buffer_length=0.15)).any()
 
 
 def test_lookahead_must_be_a_length():
