@@ -49,6 +49,8 @@ SOLVER_PARAMETERS = {
     "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
                                  "too (Adaptivity.buffer_length), so that a running crack tip stays on the fine mesh "
                                  "for several steps"),
+    "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
+                              "Adaptivity.h_void); 0: the void is not refined"),
 }
 _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
@@ -74,7 +76,9 @@ def simulation_options(p: dict) -> dict:
     if h_crack > 0:
         from .adapt import Adaptivity
         try:
-            out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)))
+            h_void = float(p.get("amr_h_void", 0.0))
+            out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
+                                      h_void=h_void if h_void > 0 else None)
         except (TypeError, ValueError) as e:
             raise StudyError(str(e)) from None
     return out
