@@ -298,7 +298,10 @@ MEASURED = {
     "paper_path_following_partial": {"note": "ngtmc run l-panel -r paper --set scheme=path-following --workers 2 (both "
                                              "cases at once, one thread each, beside test and benchmark runs on the 2 "
                                              "cores: wall times are upper bounds), 2026-12-01; interrupted once and "
-                                             "resumed (--resume), then stopped in the crack run. Each crack-run step "
+                                             "resumed (--resume), then stopped in the crack run (first stop below; "
+                                             "resumed again on 2026-12-01 and stopped at the *_stop2 entries: 41 and "
+                                             "37 more steps, crack about 47 mm long by the dissipated energy 419.6 N mm "
+                                             "/ (Gc t), 5.2 N mm, about l0/2, per step on average). Each crack-run step "
                                              "dissipated one l0 of crack (W_f + 10.6 N mm = Gc l0 x 100 mm) in 4-6 Newton "
                                              "iterations and 35-80 s; two crack-run steps were cut back (34 and 22 iterations: "
                                              "at twice and at once that dissipation), so it stayed at one l0 or below",
@@ -310,7 +313,14 @@ MEASURED = {
                                      "main_steps": 69, "main_newton_iterations": 289, "main_cutbacks": 3,
                                      "main_wall_time_s": 3215, "first_loading_peak_force": 15746,
                                      "first_loading_peak_load": 6.2422, "main_force_at_stop": 13654,
-                                     "main_load_at_stop": 6.2201, "status": "interrupted"},
+                                     "main_load_at_stop": 6.2201, "status": "interrupted",
+                                     "monotonic_steps_stop2": 120, "monotonic_newton_iterations_stop2": 546,
+                                     "monotonic_cutbacks_stop2": 5, "monotonic_wall_time_s_stop2": 6694,
+                                     "monotonic_load_at_stop2": 6.2117, "monotonic_force_at_stop2": 11525,
+                                     "monotonic_dissipated_at_stop2": 419.6,
+                                     "main_steps_stop2": 106, "main_newton_iterations_stop2": 524,
+                                     "main_cutbacks_stop2": 6, "main_wall_time_s_stop2": 6781,
+                                     "main_load_at_stop2": 6.2074, "main_force_at_stop2": 11489},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
