@@ -237,7 +237,7 @@ def parameter_table(mod, p: dict) -> dict:
 def physics_hash(mod, p: dict) -> str:
     """:func:`parameters_hash` of the physics alone (the study's PARAMETERS): runs with equal
     physics hashes differ only in resolution, and the report index compares only those."""
-    return parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p})
+    return parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p})  # (effective ones only)
 
 
 def run_description(mod, p: dict, resolution: str | None, overrides: dict | None) -> dict:
@@ -267,8 +267,10 @@ def run_description(mod, p: dict, resolution: str | None, overrides: dict | None
 # ====================================================================== the physics of a run
 def parameters_hash(p: dict) -> str:
     """``"sha256:<hex>"`` of the resolved parameters ``p`` (physics, resolution and solver settings)
-    in canonical JSON: equal for equal parameters, whatever their order or their origin."""
-    text = json.dumps(jsonable(p), sort_keys=True, separators=(",", ":"))
+    in canonical JSON: equal for equal parameters, whatever their order or their origin. Settings
+    without effect in ``p`` (:func:`ngtmc.study.effective_parameters`) are left out."""
+    from .study import effective_parameters
+    text = json.dumps(jsonable(effective_parameters(p)), sort_keys=True, separators=(",", ":"))
     return "sha256:" + hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -301,7 +303,7 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
     parameters that the study's code now resolves differently from the recorded values.
     Returns ``(resolution, overrides, p)``.
     """
-    from .study import StudyError, study_parameters
+    from .study import StudyError, effective_parameters, study_parameters
     if not meta:
         res, p = study_parameters(mod, resolution, overrides)
         return res, typed_overrides(p, overrides), p
@@ -322,7 +324,7 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
                              "the recorded overrides, or start a new run in another folder")
     recorded = {k: v.get("value") for k, v in (meta.get("parameters") or {}).items() if isinstance(v, dict)}
     if recorded:
-        diff = _differences(recorded, p)
+        diff = _differences(effective_parameters(recorded), effective_parameters(p))
         if diff:
             raise StudyError(f"cannot resume {out}: the study {mod.NAME!r} now resolves other parameters than the "
                              f"run recorded (key: recorded -> now): {'; '.join(diff)}. Start a new run")

@@ -54,6 +54,24 @@ SOLVER_PARAMETERS = {
 }
 _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
+#: Solver settings without any effect while adaptive refinement is off (h_crack = 0), with their
+#: values then: they are left out of the parameter hashes and of the comparison of a resumed run
+#: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
+#: resume and compare.
+INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0}
+
+
+def effective_parameters(p: dict) -> dict:
+    """``p`` without the settings that have no effect in it (:data:`INERT_WITHOUT_REFINEMENT`,
+    when ``h_crack`` is 0 or absent)."""
+    try:
+        off = float(p.get("h_crack", 0.0) or 0.0) == 0.0
+    except (TypeError, ValueError):
+        off = False
+    if not off:
+        return dict(p)
+    return {k: v for k, v in p.items() if k not in INERT_WITHOUT_REFINEMENT}
+
 
 def simulation_options(p: dict) -> dict:
     """Keyword arguments of :class:`ngtmc.Simulation` from the solver settings in ``p``
