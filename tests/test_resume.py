@@ -201,3 +201,23 @@ def test_refused_run_leaves_no_folder(tmp_path):
     assert not out.exists()
     run_study(tiny_study(), output=out, overrides={"E": "1500"}, **QUIET)   # the same command, corrected
     assert json.loads((out / "metadata.json").read_text())["status"] == "completed"
+
+
+def test_settings_without_effect_do_not_block_a_resume(tmp_path):
+    """The adaptivity settings (h_crack, amr_lookahead, amr_h_void) have no effect while h_crack is
+    0: they are not in the parameter hash, and a run recorded before they existed resumes; a run
+    recorded with refinement on does not resume without it."""
+    from ngtmc.runfiles import resume_parameters, run_description
+    from ngtmc.study import load_study, study_parameters
+    mod = load_study("l_panel")
+    res, p = study_parameters(mod, "quick", {})
+    assert p["h_crack"] == 0.0
+    old = {k: v for k, v in p.items() if k not in ("h_crack", "amr_lookahead", "amr_h_void")}
+    assert parameters_hash(old) == parameters_hash(p)
+    assert parameters_hash(dict(p, h_crack=2.0)) != parameters_hash(p)
+    meta = run_description(mod, old, res, {})
+    meta["parameters"] = {k: v for k, v in meta["parameters"].items() if k in old}
+    assert resume_parameters(meta, mod, None, None, tmp_path)[2] == p
+    meta_amr = run_description(mod, dict(p, h_crack=2.0), res, {"h_crack": 2.0})
+    with pytest.raises(StudyError, match="h_crack"):
+        resume_parameters(meta_amr, mod, None, {"h_crack": 0}, tmp_path)
