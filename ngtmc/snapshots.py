@@ -1,6 +1,7 @@
 """Field snapshots of one case of a run: u and alpha at the vertices (and rho per triangle) at the
 first accepted step at or past each chosen load, each on the mesh it was taken on, for
-``snapshots.npz`` and the ParaView series in ``vtk/`` (format: ``docs/run-directory.md``). Units: mm for coordinates, loads and displacements.
+``snapshots.npz`` and the ParaView series in ``vtk/`` (format: ``docs/run-directory.md``).
+Units: mm for coordinates, loads and displacements.
 """
 from __future__ import annotations
 
