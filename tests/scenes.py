@@ -50,42 +50,40 @@ def two_blocks(gap=0.05, gamma0=1e-5, maxh=0.05, void_maxh=0.02, kbar_r=1e-6):
                        regulariser=ngtmc.Regulariser("void", length=1.0, kbar_r=kbar_r))
 
 
-def notched_plate(maxh=0.08, h_band=0.02, l0=0.04, notch=0.3, **kw):
-    """Single-edge-notched square 1 x 1 in tension: a slit from the left edge to (notch, 0.5),
-    a refined band along y = 0.5; bottom clamped in y (and x at the left corner), top pulled in y."""
-    from netgen.occ import WorkPlane
+def _slit_plate(maxh, h_band, l0, notch, direction, **kw):
+    """Square 1 x 1 with a slit from the left edge to (notch, 0.5), a band along y = 0.5 refined to
+    ``h_band`` (None: no band), region "plate" (E = 210e3 MPa, nu = 0.3, Gc = 2.7 N/mm); bottom
+    clamped, top moved in ``direction`` with its other component held; mm."""
     half_w = 0.005
     plate = Rectangle(1.0, 1.0).Face()
     slit = MoveTo(-0.01, 0.5 - half_w).Rectangle(notch + 0.01, 2 * half_w).Face()
     body = plate - slit
-    band = MoveTo(0.0, 0.44).Rectangle(1.0, 0.12).Face()
-    band.faces.maxh = h_band
-    shape = Glue([body - band, body * band])
+    if h_band is None:
+        shape = body
+    else:
+        band = MoveTo(0.0, 0.44).Rectangle(1.0, 0.12).Face()
+        band.faces.maxh = h_band
+        shape = Glue([body - band, body * band])
     shape.faces.name = "plate"
     shape.edges.Min(Y).name = "bottom"
     shape.edges.Max(Y).name = "top"
     mesh = ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
     return ngtmc.Scene(mesh, {"plate": ngtmc.Material(210e3, 0.3, 2.7, l0)},
                        supports=[ngtmc.Support("bottom", x=True, y=True)],
-                       load=ngtmc.DisplacementLoad("top", "y", hold_tangential=True),
+                       load=ngtmc.DisplacementLoad("top", direction, hold_tangential=True),
                        fracture_regions="plate", **kw)
+
+
+def notched_plate(maxh=0.08, h_band=0.02, l0=0.04, notch=0.3, **kw):
+    """Single-edge-notched square 1 x 1 in tension: a slit from the left edge to (notch, 0.5),
+    a refined band along y = 0.5; bottom clamped in y (and x at the left corner), top pulled in y."""
+    return _slit_plate(maxh, h_band, l0, notch, "y", **kw)
 
 
 def sheared_plate(maxh=0.1, l0=0.05, notch=0.5, **kw):
     """Single-edge-notched square 1 x 1 in shear (the shear test of Miehe, Hofacker and Welschinger
     2010, CMAME 199, 2765-2778, Sec. 4.2, at a larger l0): a slit from the left edge to
-    (notch, 0.5), bottom clamped, top moved in x with y held. The crack leaves the notch tip
-    curving down towards the bottom right corner: no band can be placed along it beforehand.
+    (notch, 0.5), no band, bottom clamped, top moved in x with y held. The crack leaves the notch
+    tip curving down towards the bottom right corner: no band can be placed along it beforehand.
     E = 210e3 MPa, nu = 0.3, Gc = 2.7 N/mm; mm."""
-    half_w = 0.005
-    plate = Rectangle(1.0, 1.0).Face()
-    slit = MoveTo(-0.01, 0.5 - half_w).Rectangle(notch + 0.01, 2 * half_w).Face()
-    body = plate - slit
-    body.faces.name = "plate"
-    body.edges.Min(Y).name = "bottom"
-    body.edges.Max(Y).name = "top"
-    mesh = ngs.Mesh(OCCGeometry(body, dim=2).GenerateMesh(maxh=maxh))
-    return ngtmc.Scene(mesh, {"plate": ngtmc.Material(210e3, 0.3, 2.7, l0)},
-                       supports=[ngtmc.Support("bottom", x=True, y=True)],
-                       load=ngtmc.DisplacementLoad("top", "x", hold_tangential=True),
-                       fracture_regions="plate", **kw)
+    return _slit_plate(maxh, None, l0, notch, "x", **kw)
