@@ -133,10 +133,16 @@ class RefinementRecord:
     dofs_after: int
     elements: np.ndarray | None = None
 
+    _COUNTS = ("marked", "elements_before", "elements_after", "dofs_before", "dofs_after")
+
     def as_dict(self) -> dict:
         """The counts (JSON); the marked elements are :attr:`elements`."""
-        return {k: int(getattr(self, k)) for k in ("marked", "elements_before", "elements_after",
-                                                     "dofs_before", "dofs_after")}
+        return {k: int(getattr(self, k)) for k in self._COUNTS}
+
+    @classmethod
+    def from_dict(cls, counts: dict, elements: np.ndarray) -> "RefinementRecord":
+        """The record of :meth:`as_dict` and its marked elements."""
+        return cls(*(int(counts[k]) for k in cls._COUNTS), np.asarray(elements, dtype=np.int64))
 
 
 def private_scene(scene):
@@ -183,9 +189,14 @@ def _element_regions(solver) -> tuple[np.ndarray, np.ndarray]:
     return frac, void
 
 
+def _element_nodes(mesh) -> np.ndarray:
+    """Vertex numbers (0-based) of every triangle, in the order of the elements' numbers."""
+    return mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+
+
 def _neighbours(mesh, flags: np.ndarray) -> np.ndarray:
     """Elements sharing a vertex with a flagged element (the flagged ones included)."""
-    nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    nodes = _element_nodes(mesh)
     hit = np.zeros(mesh.nv, dtype=bool)
     hit[nodes[flags].ravel()] = True
     return hit[nodes].any(axis=1)
@@ -232,7 +243,7 @@ def _within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:
     """Elements whose centroid lies within ``distance`` (mm) of a flagged element's centroid (the
     flagged ones included)."""
     from scipy.spatial import cKDTree
-    nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    nodes = _element_nodes(mesh)
     xy = np.asarray(mesh.ngmesh.Coordinates())[:, :2]
     c = xy[nodes].mean(axis=1)
     d, _ = cKDTree(c[flags]).query(c, distance_upper_bound=distance)

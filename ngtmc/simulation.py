@@ -646,9 +646,7 @@ class Simulation:
             self.coupled.mesh_changed()
         for k in new:
             r = recorded[k]
-            self.refinements.append((int(r["step"]), RefinementRecord(
-                *(int(r[f]) for f in ("marked", "elements_before", "elements_after", "dofs_before", "dofs_after")),
-                marks[k])))
+            self.refinements.append((int(r["step"]), RefinementRecord.from_dict(r, marks[k])))
         last = recorded[-1]
         if self.solver.mesh.ne != int(last["elements_after"]) or self.solver.fes_u.ndof != int(last["dofs_after"]):
             raise ValueError(f"replaying the recorded refinements gave {self.solver.mesh.ne} elements and "

@@ -18,7 +18,6 @@ from .figures import (
     _fig_step_size, _fig_wf_alpha, _level_colors, _same_mesh, fig_study, mesh_payload)
 
 
-
 def snapshot_group_label(name: str, snap: dict, cases: list[dict]) -> str:
     """Label of an entry of ``snapshots.npz`` that is not a case: a group ``<case>@<g>`` of the
     snapshots of a case whose mesh changed (adaptive refinement), named after its case, mesh
@@ -30,6 +29,7 @@ def snapshot_group_label(name: str, snap: dict, cases: list[dict]) -> str:
     tri = snap.get("triangles") if isinstance(snap, dict) else None
     nt = int(np.shape(tri)[0]) if tri is not None and np.ndim(tri) == 2 else None
     return f"{label}, mesh {g}" + (f" ({nt} elements)" if nt is not None else "")
+
 
 def _env():
     import jinja2
