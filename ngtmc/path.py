@@ -37,7 +37,8 @@ applied: it bounds the dissipation per step, which the path now does itself):
    accepted states (alpha kept in [alpha_n, 1]; r the ratio of the load or dissipation
    increments, at most 2), or, without it, from the u solve with alpha_{n-1}.
 
-dD = Gc_ref ``crack_advance`` times the step control's scale, which halves on a failed step and
+dD = Gc_ref ``crack_advance`` (times the crack front's length ``crack_front`` in 3D) times the
+step control's scale, which halves on a failed step and
 doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
 regions, N/mm), times a growth factor: where the damage grows stably (the load goes on in the
 direction of the schedule) and a dissipation step converged in at most GROWTH_ITERATIONS Newton
@@ -105,15 +106,24 @@ class DissipationPath:
         on a scene with fracture regions.
     crack_advance : float, optional
         Crack advance per dissipation step, mm (default: the mean l0 of the fracture regions).
+    crack_front : float, optional
+        3D only: length of the crack front that advances, mm, so that a dissipation step is
+        Gc crack_advance crack_front (N mm). Default: the thinnest side of the bounding box of the
+        fracture regions (the slab's thickness for an extruded slab, so a plane-strain slab takes
+        the steps of its 2D twin times its thickness; tests/test_extrude.py).
     """
 
-    def __init__(self, sim, crack_advance: float | None = None):
+    def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None):
         self.sim = sim
         self.coupled = c = sim.coupled
         s = sim.solver
         if crack_advance is None:
             crack_advance = c.fracture_mean(s.l0)
         self.crack_advance = float(crack_advance)
+        if s.dim == 3 and crack_front is None:
+            crack_front = _thinnest_side(s)
+        #: length of the advancing crack front, mm (3D); 1 in 2D, where D is per mm of thickness
+        self.crack_front = float(crack_front) if s.dim == 3 else 1.0
         self.gc_ref = c.reference_toughness()
         #: dD / d(load) of the last accepted step, N mm per mm of load (per thickness in 2D)
         self.rate = 0.0
@@ -146,7 +156,7 @@ class DissipationPath:
     def target(self) -> float:
         """Dissipation per step dD, N mm (per mm of thickness in 2D), at the current scale and
         growth factor."""
-        return self.gc_ref * self.crack_advance * self.factor
+        return self.gc_ref * self.crack_advance * self.crack_front * self.factor
 
     @property
     def factor(self) -> float:
@@ -433,3 +443,12 @@ class DissipationPath:
         self.at_ceiling = int(st.get("at_ceiling", 0))
         self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))
         self.segment = st.get("segment")
+
+
+def _thinnest_side(s) -> float:
+    """Thinnest side of the bounding box of the vertices of the fracture regions, mm."""
+    import re
+    import ngsolve as ngs
+    verts = {v.nr for el in s.mesh.Elements(ngs.VOL) if re.fullmatch(s._frac_re, el.mat) for v in el.vertices}
+    pts = np.asarray(s.mesh.ngmesh.Coordinates())[sorted(verts)]
+    return float(np.min(pts.max(axis=0) - pts.min(axis=0)))

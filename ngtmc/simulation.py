@@ -113,8 +113,10 @@ class Simulation:
         ``max_substeps`` (default 200) of its capped sub-steps; ``fallback_passes`` (default 400)
         and ``newton_every`` (default 10) of its staggered fallback (see ``_attempt_monolithic``);
         ``path`` (None, or "dissipation" for path following, the default of
-        ``scheme="path-following"``) and ``crack_advance`` (mm per dissipation step, default the
-        mean l0 of the fracture regions; :mod:`ngtmc.path`).
+        ``scheme="path-following"``), ``crack_advance`` (mm per dissipation step, default the
+        mean l0 of the fracture regions) and, in 3D, ``crack_front`` (mm, the length of the crack
+        front that advances; default the thinnest side of the fracture regions' bounding box;
+        :mod:`ngtmc.path`).
     newton : NewtonOptions, optional
     progress : bool or callable
         True prints a progress line to stderr about every 5 s (:class:`ngtmc.plugins.Progress`, the
@@ -187,6 +189,10 @@ class Simulation:
         if self.path not in (None, "dissipation"):
             raise ValueError(f"coupled path = {self.path!r} is not one of None (load control), 'dissipation'")
         self.crack_advance = copt.pop("crack_advance", None)
+        self.crack_front = copt.pop("crack_front", None)
+        if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
+            raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
+                             "(in 2D the dissipation is per mm of thickness)")
         path_du_max = copt.pop("du_max", None)
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
@@ -197,7 +203,7 @@ class Simulation:
         self._path = None
         if self.coupled is not None and self.path == "dissipation":
             from .path import DissipationPath
-            self._path = DissipationPath(self, self.crack_advance)
+            self._path = DissipationPath(self, self.crack_advance, self.crack_front)
             # a displacement step of the monolithic scheme carries no lag, so its size does not set
             # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
             # by the du_max of the lagged schemes' Eq. 20
