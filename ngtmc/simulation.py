@@ -672,7 +672,7 @@ def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepCont
     ``snapshots.npz``, ``vtk/``, ``checkpoint/`` and ``report.html`` (``docs/run-directory.md``).
     Further keywords then: ``resume``, ``report``, ``vtk``, ``progress``, ``threads``,
     ``callbacks``, ``name``, ``title``, ``summary``, ``snapshot_loads`` (mm), ``references``,
-    ``targets``; the rest go to :class:`Simulation`. The result's ``run_dir`` is the folder.
+    ``targets``, ``section`` (3D: a plane ``(axis, mm)`` where the snapshots sample alpha); the rest go to :class:`Simulation`. The result's ``run_dir`` is the folder.
     """
     if out_dir is not None:
         from .runner import run_scene

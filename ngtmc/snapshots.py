@@ -2,6 +2,11 @@
 first accepted step at or past each chosen load, each on the mesh it was taken on, for
 ``snapshots.npz`` and the ParaView series in ``vtk/`` (format: ``docs/run-directory.md``).
 Units: mm for coordinates, loads and displacements.
+
+In 3D the triangles are those of the surface of the solid (the elements with rho >= 1/2;
+quadrilateral faces split in two), so that a drawing shows the bodies and not the void around
+them; a case with a ``section`` plane also samples alpha on a grid in that plane (the crack
+front of a 3D crack).
 """
 from __future__ import annotations
 
@@ -41,6 +46,9 @@ class Snapshots:
         self.dim = solver.mesh.dim
         self._vtk = None
         self._vtk_mesh = None
+        #: 3D with Case.section: the sampling grid (dict of plane, axes, coordinates) and alpha on it
+        self._section_grid = None
+        self.section: list[np.ndarray] = []
 
     def current_mesh(self) -> dict:
         """Vertices (mm), triangles (2D; boundary triangles in 3D) and pseudo-density per triangle
@@ -48,9 +56,12 @@ class Snapshots:
         mesh = self.solver.mesh
         ng = mesh.ngmesh
         vertices = np.asarray(ng.Coordinates(), dtype=float)[:mesh.nv, :self.dim].copy()
+        rho_el = self.solver.rho.vec.FV().NumPy().copy()
+        if self.dim == 3:
+            tri, rho = solid_surface(mesh, rho_el)
+            return {"vertices": vertices, "triangles": tri, "rho": rho}
         tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        rho = self.solver.rho.vec.FV().NumPy().copy() if self.dim == 2 else np.ones(len(tri))
-        return {"vertices": vertices, "triangles": tri, "rho": rho}
+        return {"vertices": vertices, "triangles": tri, "rho": rho_el}
 
     def _mesh_index(self) -> int:
         """Index of the solver's current mesh in :attr:`meshes` (added if it is new)."""
@@ -84,6 +95,8 @@ class Snapshots:
             self.alpha = list(np.asarray(data["alpha"], dtype=float))
             self.meshes = [self.current_mesh()] if k else []
             self.mesh_of = [0] * k
+        if "section_alpha" in data:
+            self.section = list(np.asarray(data["section_alpha"], dtype=float))
 
     def state(self) -> dict:
         """Arrays of the snapshots taken so far (for a checkpoint; :meth:`restore` reads them)."""
@@ -94,6 +107,8 @@ class Snapshots:
             nv = len(self.meshes[0]["vertices"]) if self.meshes else 0
             out.update({"u": np.asarray(self.u, dtype=float).reshape(k, nv, self.dim),
                         "alpha": np.asarray(self.alpha, dtype=float).reshape(k, nv)})
+            if self.section:
+                out["section_alpha"] = np.asarray(self.section, dtype=float)
             return out   # the mesh is the solver's (restore takes it from there)
         out["mesh_of"] = np.asarray(self.mesh_of, dtype=int)
         for j, m in enumerate(self.meshes):
@@ -128,6 +143,8 @@ class Snapshots:
             self.take(row)
 
     def take(self, row: dict):
+        if self.case.section is not None and self.dim == 3 and not self.changing_mesh:
+            self.section.append(self.section_values())
         u, a = self.vertex_fields()
         self.mesh_of.append(self._mesh_index())
         self.loads.append(float(row["load"]))
@@ -155,9 +172,15 @@ class Snapshots:
         if not self.changing_mesh:
             st = self.state()
             m = self.meshes[0] if self.meshes else self.current_mesh()
-            return {f"{name}__vertices": m["vertices"], f"{name}__triangles": m["triangles"],
-                    f"{name}__rho": m["rho"], f"{name}__loads": st["loads"], f"{name}__steps": st["steps"],
-                    f"{name}__u": st["u"], f"{name}__alpha": st["alpha"]}
+            out = {f"{name}__vertices": m["vertices"], f"{name}__triangles": m["triangles"],
+                   f"{name}__rho": m["rho"], f"{name}__loads": st["loads"], f"{name}__steps": st["steps"],
+                   f"{name}__u": st["u"], f"{name}__alpha": st["alpha"]}
+            if self.section and len(self.section) == len(self.loads):
+                g = self.section_grid()
+                out.update({f"{name}__section_plane": np.asarray([g["axis"], g["at"]], dtype=float),
+                            f"{name}__section_c1": g["c1"], f"{name}__section_c2": g["c2"],
+                            f"{name}__section_alpha": np.asarray(self.section, dtype=float)})
+            return out
         out = {}
         for g, idx in enumerate(groups, start=1):
             m = self.meshes[self.mesh_of[idx[0]]]
@@ -168,6 +191,53 @@ class Snapshots:
                         key + "u": np.asarray([self.u[i] for i in idx], dtype=float),
                         key + "alpha": np.asarray([self.alpha[i] for i in idx], dtype=float)})
         return out
+
+    def section_grid(self) -> dict:
+        """The sampling grid of ``case.section`` (3D): ``axis`` (0, 1, 2 for x, y, z), ``at`` (mm),
+        and the coordinates ``c1``, ``c2`` (mm) along the other two axes in their order (y, z
+        for an x plane), spanning the fracture regions' bounding box in steps of about 1/200 of
+        its larger side."""
+        if self._section_grid is None:
+            axis_name, at = self.case.section
+            axis = "xyz".index(axis_name)
+            s = self.solver
+            mesh = s.mesh
+            import re
+            import ngsolve as ngs
+            frac = [el for el in mesh.Elements(ngs.VOL) if re.fullmatch(s._frac_re, el.mat)] if s.alpha is not None else []
+            pts = np.asarray(mesh.ngmesh.Coordinates())[:mesh.nv]
+            if frac:
+                pts = pts[sorted({v.nr for el in frac for v in el.vertices})]
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            others = [i for i in range(3) if i != axis]
+            step = max(hi[i] - lo[i] for i in others) / 200.0
+            c = [np.linspace(lo[i], hi[i], max(2, int(round((hi[i] - lo[i]) / step)) + 1)) for i in others]
+            self._section_grid = {"axis": axis, "at": float(at), "c1": c[0], "c2": c[1], "others": others}
+        return self._section_grid
+
+    def section_values(self) -> np.ndarray:
+        """alpha on the section grid (n1, n2), NaN outside the fracture regions and the mesh."""
+        import ngsolve as ngs
+        g = self.section_grid()
+        s = self.solver
+        A, B = np.meshgrid(g["c1"], g["c2"], indexing="ij")
+        xyz = [None, None, None]
+        xyz[g["axis"]] = np.full(A.size, g["at"])
+        xyz[g["others"][0]], xyz[g["others"][1]] = A.ravel(), B.ravel()
+        out = np.full(A.size, np.nan)
+        if s.alpha is None:
+            return out.reshape(A.shape)
+        mp = s.mesh(*xyz)
+        inside = np.nonzero(mp["nr"] >= 0)[0]
+        if inside.size:
+            names = {m for m in s.mesh.GetMaterials()}
+            import re
+            ind = s.mesh.MaterialCF({m: 1.0 for m in names if re.fullmatch(s._frac_re, m)}, default=0.0)
+            sub = mp[inside]
+            keep = np.asarray(ind(sub)).ravel() > 0.5
+            vals = np.asarray(s.alpha(sub)).ravel()
+            out[inside[keep]] = vals[keep]
+        return out.reshape(A.shape)
 
     def write_vtk(self, k: int, load: float):
         """Write snapshot ``k`` (the solver's current state) as ``vtk/<case>_<k>.vtu`` (fields of
@@ -189,3 +259,41 @@ class Snapshots:
             return
         files = [(load, f"{self.case.name}_{k:04d}.vtu") for k, load in enumerate(self.loads)]
         write_pvd(self.vtk_dir / f"{self.case.name}.pvd", [(load, f) for load, f in files if (self.vtk_dir / f).exists()])
+
+
+# faces of each volume element type, as local vertex numbers (quadrilaterals as 4)
+_FACES = {4: [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)],
+          6: [(0, 1, 2), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5)],
+          8: [(0, 1, 2, 3), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)],
+          5: [(0, 1, 2, 3), (0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4)]}
+
+
+def solid_surface(mesh, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Surface triangles (n, 3) of the elements of a 3D mesh with rho >= 1/2, and the rho of the
+    element each bounds: the faces that belong to exactly one such element, quadrilaterals split
+    in two. Units: none (vertex numbers)."""
+    import ngsolve as ngs
+    seen: dict[tuple, tuple] = {}
+    for el in mesh.Elements(ngs.VOL):
+        r = float(rho[el.nr])
+        if r < 0.5:
+            continue
+        v = [x.nr for x in el.vertices]
+        for f in _FACES[len(v)]:
+            face = tuple(v[i] for i in f)
+            key = tuple(sorted(face))
+            if key in seen:
+                seen[key] = None
+            else:
+                seen[key] = (face, r)
+    tri, rr = [], []
+    for item in seen.values():
+        if item is None:
+            continue
+        face, r = item
+        tri.append(face[:3])
+        rr.append(r)
+        if len(face) == 4:
+            tri.append((face[0], face[2], face[3]))
+            rr.append(r)
+    return np.asarray(tri, dtype=np.int64).reshape(-1, 3), np.asarray(rr, dtype=float)

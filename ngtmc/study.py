@@ -122,6 +122,9 @@ class Case:
     cost: expected cost relative to the study's other cases (dimensionless, default 1): on a
         cluster the costliest cases start first, so that the last one to finish is not a long one
         started late; a serial run keeps the study's order.
+    section: 3D only, a plane ``(axis, coordinate)`` such as ``("x", 4.0)`` (mm) through which each
+        snapshot also samples alpha on a grid (the crack plane: the report draws the crack front
+        there; :mod:`ngtmc.snapshots`). None: no section.
     """
 
     name: str
@@ -134,10 +137,16 @@ class Case:
     parameters: dict = field(default_factory=dict)
     run: Callable | None = None
     cost: float = 1.0
+    section: tuple | None = None
 
     def __post_init__(self):
         if not self.label:
             self.label = self.name
+        if self.section is not None:
+            axis, at = self.section
+            if axis not in ("x", "y", "z") or not np.isfinite(float(at)):
+                raise StudyError(f"case {self.name!r}: section = {self.section!r} must be (axis, coordinate in mm) with "
+                                 "axis 'x', 'y' or 'z'")
         if not (isinstance(self.cost, (int, float)) and not isinstance(self.cost, bool) and self.cost > 0
                 and self.cost < float("inf")):
             raise ValueError(f"case {self.name!r}: cost = {self.cost!r} must be a finite number > 0")
@@ -176,6 +185,7 @@ STUDIES = {
     "l_panel": "ngtmc.studies.l_panel",
     "step_control": "ngtmc.studies.step_control",
     "three_point_bending": "ngtmc.studies.three_point_bending",
+    "three_point_bending_3d": "ngtmc.studies.three_point_bending_3d",
 }
 
 #: Entry-point group through which other packages register studies (name -> module).

@@ -212,6 +212,7 @@ class _Run(RunFolder):
             res["cpu_time_s"] = cm["cpu_time_s"] = time.process_time() - cpu0
             # where the time went (s) since this process started the case (see ngtmc.solver.TIMING_KEYS)
             res["time_split_s"] = {k: float(v) for k, v in sim.solver.timings.items()}
+            res["peak_memory_mb"] = peak_memory_mb()
             if sim.refinements:   # adaptive refinement: the mesh the case ended on
                 cm["mesh_final"] = {k_: v for k_, v in _mesh_info(sim.solver).items() if k_ != "displacement_order"}
                 cm["refinements"] = len(sim.refinements)
@@ -240,7 +241,8 @@ class _Run(RunFolder):
         finish("completed")
         r = self.results[case.name]
         self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: done, {r['steps']} steps, "
-                          f"peak force {r['peak_force']:.5g} {sim.force_unit} at {r['peak_load']:.5g} mm, {r.get('wall_time_s', 0):.0f} s")
+                          f"peak force {r['peak_force']:.5g} {sim.force_unit} at {r['peak_load']:.5g} mm, {r.get('wall_time_s', 0):.0f} s, "
+                          f"peak memory {r['peak_memory_mb']:.0f} MB")
         self.write_all()
 
     # ------------------------------------------------------------ whole run
@@ -278,3 +280,12 @@ class _Run(RunFolder):
             raise
         self.status = "completed"
         self.write_all()
+
+
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process so far, MB (the largest resident set of the process
+    that ran the case: in a serial run of several cases, the peak over the cases run so far)."""
+    import resource
+    import sys
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return float(rss) / (1024.0 ** 2 if sys.platform == "darwin" else 1024.0)

@@ -110,14 +110,16 @@ def _scene_parameters(scene, schedule, control, options: dict) -> dict:
 
 def scene_study(scene, schedule, control=None, *, name: str | None = None, title: str | None = None,
                 summary: str | None = None, snapshot_loads: Sequence[float] | None = None,
-                references: Sequence[dict] = (), targets: Sequence[dict] = (), **options) -> ModuleType:
+                references: Sequence[dict] = (), targets: Sequence[dict] = (), section: tuple | None = None,
+                **options) -> ModuleType:
     """A one-case study module (the interface of ``docs/study-interface.md``) around a user's own
     scene, so that the runner writes its run folder as for a named study.
 
     ``name`` defaults to ``scene.name``; ``snapshot_loads`` (mm) default to 8 loads evenly along the
     schedule; ``references`` and ``targets`` in the metadata format; ``options``: keyword arguments
-    of :class:`ngtmc.Simulation` (e.g. ``scheme``). PARAMETERS describe the scene, schedule and
-    control (materials, densities, mesh, ...), so a resume with another scene is refused.
+    of :class:`ngtmc.Simulation` (e.g. ``scheme``). ``section`` (3D): the plane ``(axis, mm)`` of
+    :class:`ngtmc.study.Case`. PARAMETERS describe the scene, schedule and control (materials,
+    densities, mesh, ...), so a resume with another scene is refused.
     """
     from ..stepping import Schedule
     if not isinstance(schedule, Schedule):
@@ -139,7 +141,7 @@ def scene_study(scene, schedule, control=None, *, name: str | None = None, title
     mod.RESOLUTIONS = {"custom": {}}
     mod.DEFAULT_RESOLUTION = "custom"
     case = Case(name="main", label=getattr(scene, "name", None) or study_name, scene=scene, schedule=schedule,
-                control=control, options=dict(options), snapshot_loads=list(snapshot_loads))
+                control=control, options=dict(options), snapshot_loads=list(snapshot_loads), section=section)
     mod.cases = lambda p: [case]
     mod.references = lambda p: list(references)
     mod.targets = lambda p: list(targets)
@@ -151,7 +153,8 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
               threads: int | None = None, checkpoint_every: int = 25, checkpoint_seconds: float = 30.0,
               callbacks: Sequence[Callable] = (), name: str | None = None, title: str | None = None,
               summary: str | None = None, snapshot_loads: Sequence[float] | None = None,
-              references: Sequence[dict] = (), targets: Sequence[dict] = (), **options):
+              references: Sequence[dict] = (), targets: Sequence[dict] = (), section: tuple | None = None,
+              **options):
     """Run a user's own scene into the run folder ``out_dir``, with the machinery of a named study
     (history.csv, metadata.json, snapshots.npz, vtk/, checkpoint/, report.html); see
     :func:`scene_study` and :func:`run_study`. Returns the :class:`ngtmc.SimulationResult`, its
@@ -161,7 +164,8 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
     if out_dir is None:
         raise StudyError("run_scene needs out_dir, the run folder to write")
     mod = scene_study(scene, schedule, control, name=name, title=title, summary=summary,
-                      snapshot_loads=snapshot_loads, references=references, targets=targets, **options)
+                      snapshot_loads=snapshot_loads, references=references, targets=targets, section=section,
+                      **options)
     run = _execute(mod, None, out_dir, None, report, resume, progress, threads, checkpoint_every,
                    checkpoint_seconds, vtk, callbacks)
     sim = run.simulations.get("main")

@@ -1,0 +1,91 @@
+"""The 3D study (studies/three_point_bending_3d.py): its meshes, its parameters, and the adjoint in 3D.
+
+The slab against its 2D twin at quick resolution is recorded in the study's MEASURED (minutes of
+3D runs); the exact agreement of a plane-strain slab with 2D is tests/test_extrude.py."""
+import dataclasses
+import math
+
+import numpy as np
+import ngsolve as ngs
+import pytest
+
+import ngtmc
+from ngtmc import sensitivities as S
+from ngtmc.study import StudyError, load_study, study_parameters
+
+study = load_study("three_point_bending_3d")
+
+
+def test_the_study_is_registered_and_refuses_bad_parts():
+    assert "three_point_bending_3d" in ngtmc.list_studies()
+    _, p = study_parameters(study, "quick", {"parts": "everything"})
+    with pytest.raises(StudyError, match="parts"):
+        study.cases(p)
+    _, p = study_parameters(study, "quick", {"sphere_radius": 0.6})
+    with pytest.raises(StudyError, match="sphere_radius"):
+        study.cases(p)
+
+
+def test_cases_follow_parts():
+    for parts, names in (("all", ["plane_strain_2d", "slab", "hemisphere"]), ("slab", ["plane_strain_2d", "slab"]),
+                         ("hemisphere", ["hemisphere"])):
+        _, p = study_parameters(study, "quick", {"parts": parts})
+        assert [c.name for c in study.cases(p)] == names
+
+
+def test_slab_is_the_2d_mesh_extruded():
+    _, p = study_parameters(study, "quick", {"parts": "slab"})
+    sc2, sc3 = study.build_plane_strain_scene(p), study.build_slab_scene(p)
+    t = float(p["slab_thickness"])
+    assert sc3.mesh.dim == 3 and sc3.mesh.ne == sc2.mesh.ne and sc2.thickness == t
+    assert ngs.Integrate(1, sc3.mesh) == pytest.approx(t * ngs.Integrate(1, sc2.mesh), rel=1e-12)
+    assert {"front", "back", "load", "support_left", "support_right"} <= set(sc3.mesh.GetBoundaries())
+
+
+def test_hemisphere_mesh_has_its_regions_volumes_and_faces():
+    _, p = study_parameters(study, "quick", {"parts": "hemisphere", "sphere_h_band": 0.08, "sphere_h_void": 0.1,
+                                             "sphere_h_beam": 0.4})
+    sc = study.build_hemisphere_scene(p)
+    m = sc.mesh
+    vol = {r: ngs.Integrate(1, m, definedon=m.Materials(r)) for r in set(m.GetMaterials())}
+    L, H, W = 4.0, 1.0, 0.5
+    R, gap, vw = 0.25, 0.025, 0.5
+    beam = L * H * W - 0.04 * 0.2 * W
+    solid = sum(vol[r] for r in ("beam", "band", "support_zone", "load_zone"))
+    assert solid == pytest.approx(beam, rel=1e-9)
+    quarter_ball = math.pi * R**3 / 3           # the hemisphere's half (z >= 0)
+    assert vol["indenter"] == pytest.approx(quarter_ball, rel=2e-3)   # curved to order 2
+    assert vol["void"] + vol["indenter"] == pytest.approx(2 * vw * (gap + R) * W, rel=1e-9)
+    area = {b: ngs.Integrate(1, m, definedon=m.Boundaries(b)) for b in ("load", "support_left", "support_right")}
+    assert area["load"] == pytest.approx(math.pi * R**2 / 2, rel=2e-3)
+    assert area["support_left"] == pytest.approx(0.1 * W, rel=1e-9) == area["support_right"]
+
+
+def test_adjoint_in_3d_against_finite_differences():
+    """#13: the adjoint on a small 3D scene with contact and a growing crack. The design study's
+    coarse scene (notched beam, third-medium pad under an indenter; tests/test_sensitivities.py)
+    extruded into two layers of prisms, u_z held on the front face only, so the fields vary
+    along z. Eight steps to 0.2 mm: the pad closes, then a crack grows (max alpha above 0.5).
+    Measured: relative errors about 1e-8 (eps = 1e-5)."""
+    from ngtmc.studies import design_for_contact as D
+    p = D._params("quick", h_band=0.2, h_pad=0.1, h=0.5, du=0.025, l0=0.3, Gc=0.1)
+    sc2 = D.build_scene(p)
+    sc2.mesh.Curve(1)
+    sc = dataclasses.replace(sc2, mesh=ngtmc.extrude(sc2.mesh, 0.2, layers=2), thickness=None,
+                             supports=list(sc2.supports) + [ngtmc.Support("front", z=True)])
+    path = S.record_path(sc, D.schedule(p), D.control(p), newton=ngtmc.NewtonOptions(rtol=1e-12))
+    h = path.history
+    assert h["max_alpha"].iloc[-1] > 0.5 and h["force"].iloc[-1] < h["force"].max()    # the crack grew
+    assert h["force"].iloc[1] < 0.05 * h["force"].max()                                 # contact closed later
+    assert np.abs(path.solver.u.components[2].vec.FV().NumPy()).max() > 0
+    rng = np.random.default_rng(1)
+    pad = S.design_mask(path, "pad")
+    d = rng.standard_normal(path.rho.size)
+    d[pad] = 5e-3 * rng.uniform(-1.0, 1.0, int(pad.sum()))
+    direction = {"rho": d, "E": 100.0, "Gc": 0.01}
+    objs = [S.ExternalWork(), S.ReactionAtStep(-1), S.FinalFractureEnergy()]
+    adj = np.array([S.directional_derivative(S.gradient(path, o, wrt=("rho", "E", "Gc")), direction) for o in objs])
+    fd = S.directional_fd(path, objs, direction, 1e-5)
+    rel = np.abs(fd - adj) / np.abs(adj)
+    print("\n3D adjoint: relative FD errors", [f"{r:.1e}" for r in rel])
+    assert np.all(rel <= 1e-4)
