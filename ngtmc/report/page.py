@@ -16,6 +16,7 @@ from .figures import (
     ALPHA_COLORSCALE, FONT, MAX_EDGE_TRIANGLES, MAX_FRAMES, MAX_VERTEX_FRAMES, N_LEVELS, RHO_COLORSCALE,
     _case_style, _fig_energies, _fig_force, _fig_interpolation, _fig_newton, _fig_speed_error,
     _fig_step_size, _fig_wf_alpha, _level_colors, _same_mesh, fig_study, mesh_payload)
+from .figures3d import MAX_VALUES_3D, is_3d, snapshot_figures_3d
 
 
 def snapshot_group_label(name: str, snap: dict, cases: list[dict]) -> str:
@@ -163,7 +164,8 @@ def render_report(run_dir, output=None) -> Path:
     -------
     pathlib.Path of the written, self-contained HTML page (plotly.js embedded, no request to
     any other host). Sections: header and parameters, force against displacement with the
-    references, key numbers, step history, phase-field snapshots on the deformed mesh, density
+    references, key numbers, step history, phase-field snapshots on the deformed mesh (3D: on
+    the deformed surface, and in the section plane when recorded; :mod:`.figures3d`), density
     and mesh, energies, speed against error, and for ``contact_gamma0`` the interpolation rules.
     """
     run_dir = Path(run_dir)
@@ -208,14 +210,28 @@ def render_report(run_dir, output=None) -> Path:
     # snapshots
     meshes = {}
     mesh_info = []
+    snap3d = []  # 3D entries: plotly figures in figs (the 2D mesh payload assumes 2D triangles)
     if snapshots:
         # frame budget: about MAX_VERTEX_FRAMES vertex positions over all cases
         n_vert = sum(int(np.shape(sn.get("vertices", ()))[0]) for sn in snapshots.values()
-                     if isinstance(sn, dict) and np.ndim(sn.get("vertices", ())) == 2)
+                     if isinstance(sn, dict) and np.ndim(sn.get("vertices", ())) == 2 and not is_3d(sn))
         frame_cap = max(2, min(MAX_FRAMES, MAX_VERTEX_FRAMES // max(n_vert, 1)))
+        n_3d = sum(1 for sn in snapshots.values() if is_3d(sn))
         for c in cases + [{"name": n, "label": snapshot_group_label(n, snapshots[n], cases), "parameters": {}}
                           for n in snapshots if n not in {c["name"] for c in cases}]:
             snap = snapshots.get(c["name"])
+            if is_3d(snap):
+                v3 = snapshot_figures_3d(snap, c["label"], MAX_FRAMES, MAX_VALUES_3D // n_3d)
+                if v3 is not None:
+                    k = len(snap3d)
+                    surface, section = v3.pop("surface"), v3.pop("section")
+                    v3.update(label=c["label"], surface_id=f"snap3d-{k}",
+                              section_id=f"section3d-{k}" if section else None)
+                    figs[v3["surface_id"]] = surface
+                    if section:
+                        figs[v3["section_id"]] = section
+                    snap3d.append(v3)
+                continue
             payload = mesh_payload(snap, frame_cap) if snap else None
             if payload is None:
                 continue
@@ -294,7 +310,7 @@ def render_report(run_dir, output=None) -> Path:
         "case_nums": case_nums, "interp": interp, "study_figures": study_figures,
         "speed": speed, "speed_meaningful": speed_meaningful,
         "time_split": time_split_rows(meta, history, cases),
-        "mesh_info": mesh_info, "has_snapshots": bool(mesh_info),
+        "mesh_info": mesh_info, "has_snapshots": bool(mesh_info or snap3d), "snap3d": snap3d,
         "fig_ids": list(figs), "mesh_plot_ids": mesh_plot_ids,
         "fig_json": _script_json(_clean(figs)), "mesh_json": _script_json(_clean(meshes)),
         "mesh_plot_json": _script_json(mesh_plot_ids),
