@@ -89,3 +89,30 @@ def test_adjoint_in_3d_against_finite_differences():
     rel = np.abs(fd - adj) / np.abs(adj)
     print("\n3D adjoint: relative FD errors", [f"{r:.1e}" for r in rel])
     assert np.all(rel <= 1e-4)
+
+
+def test_slab_with_the_indenter_follows_its_2d_twin_into_contact():
+    """The study's slab and its 2D twin on a coarse mesh (h_band = 0.06 mm), to 0.07 mm: the void
+    is squeezed from 0.05 mm on and the force rises 10x. The two differ by the regulariser's 1/d
+    (3D stiffer) and the void elements' dofs along z (3D softer); the study's docstring gives
+    the measured split. Stated tolerance: 0.5 % of the final force at every step (a relative
+    measure is ill-conditioned where the force is still small: -0.51 % where it is a tenth of its
+    final value). Measured: the slab is softer by 0.03-0.15 % from a quarter of the final force on,
+    growing as the void is squeezed; at most 0.15 % of the final force. (At the quick run's peak,
+    after the crack: -0.02 %, the study's MEASURED.)"""
+    _, p = study_parameters(study, "quick", {"parts": "slab", "h_band": 0.06, "h_void": 0.08, "h_indenter": 0.2,
+                                             "h_beam": 0.5, "slab_thickness": 0.06, "stop_load": 0.07,
+                                             "scheme": "single-pass"})
+    h = {}
+    for case in study.cases(p):
+        r = ngtmc.simulate(case.build_scene(), case.schedule,
+                           case.control, **case.options)
+        h[case.name] = r.history
+    h2, h3 = h["plane_strain_2d"], h["slab"]
+    f2 = h2["force"].to_numpy()
+    f3 = np.interp(h2["load"], h3["load"], h3["force"])   # Eq. 20 gives both about, not exactly, the same steps
+    assert f2[-1] > 10 * np.interp(0.05, h2["load"], f2)      # contact carried the load
+    after = f2 > 0.1 * f2[-1]
+    print("\nslab / 2D - 1 after contact:", np.round(f3[after] / f2[after] - 1, 5), "steps", len(h2), len(h3))
+    print("max |slab - 2D| / final force:", np.abs(f3 - f2).max() / f2[-1])
+    assert np.abs(f3 - f2).max() < 5e-3 * f2[-1]
