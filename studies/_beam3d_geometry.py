@@ -43,7 +43,9 @@ def check_hemisphere(p: dict):
 
 def hemisphere_mesh(p: dict):
     """The hemisphere scene's mesh for the plain parameter dict ``p`` (see the study's PARAMETERS;
-    sizes ``sphere_h_band``, ``sphere_h_void``, ``sphere_h_indenter``, ``sphere_h_beam``)."""
+    sizes ``sphere_h_band``, ``sphere_h_void``, ``sphere_h_contact`` (the void in a block of half
+    side ``sphere_contact_box`` under the hemisphere's lowest point), ``sphere_h_indenter``,
+    ``sphere_h_beam``)."""
     import ngsolve as ngs
     from netgen.occ import Box, Glue, OCCGeometry, Pnt, Sphere, Y
 
@@ -80,9 +82,18 @@ def hemisphere_mesh(p: dict):
     ball.faces.Max(Y).name = "load"     # the flat face (the void's top face around it stays free)
     ball.solids.maxh = float(p["sphere_h_indenter"])
     void = Box(Pnt(xm - vw, H, 0), Pnt(xm + vw, yc, W)) - ball
-    void.solids.name = "void"
-    void.solids.maxh = float(p["sphere_h_void"])
-    shape = Glue([rest, band, void, ball] + zones + under)
+    c = float(p["sphere_contact_box"])
+    voids = [void]
+    if c > 0:   # the contact patch: finer void under the hemisphere's lowest point
+        near = Box(Pnt(xm - c, H, 0), Pnt(xm + c, min(H + gap + c, yc), c))
+        voids = [void - near, void * near]
+        voids[1].solids.maxh = float(p["sphere_h_contact"])
+        voids[0].solids.maxh = float(p["sphere_h_void"])
+    else:
+        void.solids.maxh = float(p["sphere_h_void"])
+    for v in voids:
+        v.solids.name = "void"
+    shape = Glue([rest, band, ball] + voids + zones + under)
     tol = 1e-9
     for f in shape.faces:
         c = f.center

@@ -52,7 +52,9 @@ Geometry of (b), mm (our choices; no published 3D reference exists)
   ``sphere_gap`` = 0.025 above the beam top at mid-span and mid-width; the flat face is the loaded
   boundary (u_y imposed, tangential held);
 * void (rho = 0): the block x in [2 - 0.5, 2 + 0.5], from the beam top to the hemisphere's flat
-  face, across the modelled width, minus the hemisphere;
+  face, across the modelled width, minus the hemisphere; meshed to ``sphere_h_contact`` in a block
+  of half side ``sphere_contact_box`` = 0.15 under the lowest point (the contact patch: its radius
+  is about sqrt(R d) = 0.07 mm at d = 0.02 mm of indentation, one element of h_void = 0.06);
 * material: Table 1 (E = 20.8e3 MPa, nu = 0.3, Gc = 0.54 N/mm) with **l0 = ``sphere_l0`` =
   0.08 mm** (not 0.03: at l0 = 0.03 the quick mesh would need about 1e6 tetrahedra), gamma0 = 5e-6,
   kbar_r = 1e-6 with L = 4 mm;
@@ -112,6 +114,8 @@ PARAMETERS = {
     "sphere_band_half_width": (0.1, "mm", "half width of the refined block above the notch"),
     "sphere_support_length": (0.1, "mm", "length of the support strips across the width"),
     "sphere_support_zone": (0.15, "mm", "side of the blocks above the supports without fracture"),
+    "sphere_contact_box": (0.15, "mm", "half side of the block of void under the hemisphere's lowest point meshed to "
+                                      "sphere_h_contact (the contact patch); 0: none"),
     "sphere_load_zone": (0.15, "mm", "half length, depth and half width of the block of the beam top under the "
                                     "hemisphere without fracture (region 'load_zone'); 0: none"),
     "sphere_l0": (0.08, "mm", "phase-field length scale of the hemisphere case (cost: see the docstring)"),
@@ -124,15 +128,15 @@ PARAMETERS = {
 RESOLUTIONS = {
     "quick": {"h_band": 0.03, "h_void": 0.06, "h_indenter": 0.16, "h_beam": 0.5, "slab_thickness": 0.03,
               "du_max": 1e-3, "stop_load": 0.12,
-              "sphere_h_band": 0.04, "sphere_h_void": 0.06, "sphere_h_indenter": 0.08, "sphere_h_beam": 0.25,
+              "sphere_h_contact": 0.02, "sphere_h_band": 0.04, "sphere_h_void": 0.06, "sphere_h_indenter": 0.08, "sphere_h_beam": 0.25,
               "sphere_du_max": 2e-3, "sphere_stop_load": 0.1},
     "medium": {"h_band": 0.015, "h_void": 0.03, "h_indenter": 0.08, "h_beam": 0.25, "slab_thickness": 0.015,
                "du_max": 1e-3, "stop_load": 0.12,
-               "sphere_h_band": 0.0267, "sphere_h_void": 0.04, "sphere_h_indenter": 0.06, "sphere_h_beam": 0.2,
+               "sphere_h_contact": 0.015, "sphere_h_band": 0.0267, "sphere_h_void": 0.04, "sphere_h_indenter": 0.06, "sphere_h_beam": 0.2,
                "sphere_du_max": 1e-3, "sphere_stop_load": 0.1},
     "paper": {"h_band": 0.0075, "h_void": 0.015, "h_indenter": 0.04, "h_beam": 0.15, "slab_thickness": 0.0075,
               "du_max": 0.5e-3, "stop_load": 0.12,
-              "sphere_h_band": 0.02, "sphere_h_void": 0.03, "sphere_h_indenter": 0.05, "sphere_h_beam": 0.15,
+              "sphere_h_contact": 0.01, "sphere_h_band": 0.02, "sphere_h_void": 0.03, "sphere_h_indenter": 0.05, "sphere_h_beam": 0.15,
               "sphere_du_max": 1e-3, "sphere_stop_load": 0.1},
 }
 RESOLUTION_PARAMETERS = {
@@ -145,6 +149,7 @@ RESOLUTION_PARAMETERS = {
     "stop_load": ("mm", "slab: load at which the slab and its 2D twin stop (after the drop)"),
     "sphere_h_band": ("mm", "hemisphere: element size in the block above the notch"),
     "sphere_h_void": ("mm", "hemisphere: element size in the void"),
+    "sphere_h_contact": ("mm", "hemisphere: element size in the void under the lowest point (sphere_contact_box)"),
     "sphere_h_indenter": ("mm", "hemisphere: element size in the hemisphere"),
     "sphere_h_beam": ("mm", "hemisphere: element size in the rest of the beam"),
     "sphere_du_max": ("mm", "hemisphere: largest displacement step"),
