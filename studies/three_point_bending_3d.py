@@ -63,7 +63,7 @@ Geometry of (b), mm (our choices; no published 3D reference exists)
 Resolutions
 -----------
 Mesh and step sizes only. ``quick``: the slab at h_band = 0.03 mm (2613 elements in the plane)
-and the hemisphere at h_band = l0/2 = 0.04 mm (about 18000 tetrahedra); ``medium``: the slab at
+and the hemisphere at h_band = l0/2 = 0.04 mm (22098 tetrahedra, the void 0.02 mm under the contact); ``medium``: the slab at
 the 2D study's quick sizes (h_band = 0.015 mm, 8632 prisms), the hemisphere at l0/3; ``paper``:
 the slab at the 2D study's paper sizes (h_band = 0.0075 mm), the hemisphere at l0/4.
 
