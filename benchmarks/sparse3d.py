@@ -27,13 +27,12 @@ SOLVERS = {"u": ("sparsecholesky", "umfpack", "pardiso"), "coupled": ("umfpack",
 def measure(resolution: str, matrix: str, solver: str, threads: int) -> dict:
     """Factorize and solve one matrix of the hemisphere case; returns times (s), sizes and the
     process's peak memory (MB)."""
-    import resource
-
     import numpy as np
     import ngsolve as ngs
 
     import ngtmc
     from ngtmc.coupled import CoupledNewton
+    from ngtmc.runner.cases import peak_memory_mb
     from ngtmc.study import load_study, study_parameters
 
     ngs.SetNumThreads(threads)
@@ -41,7 +40,7 @@ def measure(resolution: str, matrix: str, solver: str, threads: int) -> dict:
     _, p = study_parameters(mod, resolution, {"parts": "hemisphere"})
     scene = mod.build_hemisphere_scene(p)
     s = ngtmc.Solver(scene)
-    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    rss0 = peak_memory_mb()
     if matrix == "u":
         s.solve_displacement(float(p["sphere_gap"]) * 1.2)   # past contact: a squeezed void
         s.a_u.AssembleLinearization(s.u.vec)
@@ -70,7 +69,7 @@ def measure(resolution: str, matrix: str, solver: str, threads: int) -> dict:
     return {"resolution": resolution, "matrix": matrix, "solver": solver, "threads": threads,
             "elements": scene.mesh.ne, "n": int(A.height), "free": int(fr.sum()), "nnz": int(A.nze),
             "factorize_s": t_fact, "solve_s": t_solve, "residual": rel,
-            "memory_before_mb": rss0, "peak_memory_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "memory_before_mb": rss0, "peak_memory_mb": peak_memory_mb()}
 
 
 def main(argv=None):

@@ -121,7 +121,8 @@ class DissipationPath:
             crack_advance = c.fracture_mean(s.l0)
         self.crack_advance = float(crack_advance)
         if s.dim == 3 and crack_front is None:
-            crack_front = _thinnest_side(s)
+            lo, hi = s.fracture_box()
+            crack_front = float(np.min(hi - lo))
         #: length of the advancing crack front, mm (3D); 1 in 2D, where D is per mm of thickness
         self.crack_front = float(crack_front) if s.dim == 3 else 1.0
         self.gc_ref = c.reference_toughness()
@@ -444,11 +445,3 @@ class DissipationPath:
         self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))
         self.segment = st.get("segment")
 
-
-def _thinnest_side(s) -> float:
-    """Thinnest side of the bounding box of the vertices of the fracture regions, mm."""
-    import re
-    import ngsolve as ngs
-    verts = {v.nr for el in s.mesh.Elements(ngs.VOL) if re.fullmatch(s._frac_re, el.mat) for v in el.vertices}
-    pts = np.asarray(s.mesh.ngmesh.Coordinates())[sorted(verts)]
-    return float(np.min(pts.max(axis=0) - pts.min(axis=0)))

@@ -49,10 +49,18 @@ class Snapshots:
         #: 3D with Case.section: the sampling grid (dict of plane, axes, coordinates) and alpha on it
         self._section_grid = None
         self.section: list[np.ndarray] = []
+        self._current = None   # (mesh key, current_mesh()) of the solver's mesh
 
     def current_mesh(self) -> dict:
         """Vertices (mm), triangles (2D; boundary triangles in 3D) and pseudo-density per triangle
-        of the solver's mesh now."""
+        of the solver's mesh now; made once per mesh (a refinement changes the solver's
+        ``mesh_generation``)."""
+        key = (id(self.solver.mesh), self.solver.mesh_generation)
+        if self._current is None or self._current[0] != key:
+            self._current = (key, self._make_mesh())
+        return self._current[1]
+
+    def _make_mesh(self) -> dict:
         mesh = self.solver.mesh
         ng = mesh.ngmesh
         vertices = np.asarray(ng.Coordinates(), dtype=float)[:mesh.nv, :self.dim].copy()
@@ -200,24 +208,21 @@ class Snapshots:
         if self._section_grid is None:
             axis_name, at = self.case.section
             axis = "xyz".index(axis_name)
-            s = self.solver
-            mesh = s.mesh
-            import re
-            import ngsolve as ngs
-            frac = [el for el in mesh.Elements(ngs.VOL) if re.fullmatch(s._frac_re, el.mat)] if s.alpha is not None else []
-            pts = np.asarray(mesh.ngmesh.Coordinates())[:mesh.nv]
-            if frac:
-                pts = pts[sorted({v.nr for el in frac for v in el.vertices})]
-            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            lo, hi = self.solver.fracture_box()
             others = [i for i in range(3) if i != axis]
             step = max(hi[i] - lo[i] for i in others) / 200.0
             c = [np.linspace(lo[i], hi[i], max(2, int(round((hi[i] - lo[i]) / step)) + 1)) for i in others]
-            self._section_grid = {"axis": axis, "at": float(at), "c1": c[0], "c2": c[1], "others": others}
+            import re
+            s = self.solver
+            # 1 in the fracture regions, 0 elsewhere (alpha is defined there only)
+            inside = s.mesh.MaterialCF({m: 1.0 for m in set(s.mesh.GetMaterials()) if re.fullmatch(s._frac_re, m)},
+                                       default=0.0) if s.alpha is not None else None
+            self._section_grid = {"axis": axis, "at": float(at), "c1": c[0], "c2": c[1], "others": others,
+                                  "fracture": inside}
         return self._section_grid
 
     def section_values(self) -> np.ndarray:
         """alpha on the section grid (n1, n2), NaN outside the fracture regions and the mesh."""
-        import ngsolve as ngs
         g = self.section_grid()
         s = self.solver
         A, B = np.meshgrid(g["c1"], g["c2"], indexing="ij")
@@ -230,11 +235,8 @@ class Snapshots:
         mp = s.mesh(*xyz)
         inside = np.nonzero(mp["nr"] >= 0)[0]
         if inside.size:
-            names = {m for m in s.mesh.GetMaterials()}
-            import re
-            ind = s.mesh.MaterialCF({m: 1.0 for m in names if re.fullmatch(s._frac_re, m)}, default=0.0)
             sub = mp[inside]
-            keep = np.asarray(ind(sub)).ravel() > 0.5
+            keep = np.asarray(g["fracture"](sub)).ravel() > 0.5
             vals = np.asarray(s.alpha(sub)).ravel()
             out[inside[keep]] = vals[keep]
         return out.reshape(A.shape)

@@ -454,6 +454,16 @@ class Solver:
     def max_alpha(self) -> float:
         return float(self.alpha.vec.FV().NumPy().max()) if self.alpha is not None else 0.0
 
+    def fracture_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners (mm) of the bounding box of the vertices of the fracture
+        regions (of the whole mesh when the scene has none)."""
+        mesh = self.mesh
+        pts = np.asarray(mesh.ngmesh.Coordinates())[:mesh.nv]
+        if self.alpha is not None:
+            pts = pts[sorted({v.nr for el in mesh.Elements(ngs.VOL) if re.fullmatch(self._frac_re, el.mat)
+                              for v in el.vertices})]
+        return pts.min(axis=0), pts.max(axis=0)
+
     # ================================================================= loads
     def _vertex_dof(self, v: int, c: int) -> int:
         """The dof of displacement component ``c`` at vertex ``v``."""
