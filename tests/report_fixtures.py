@@ -7,6 +7,7 @@ a void strip along the top edge. Nothing here needs NGSolve.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -233,3 +234,10 @@ def write_run(path, study: str = "three_point_bending", cases=None, status: str 
         meta["results"] = results
     (path / "metadata.json").write_text(json.dumps(meta, indent=2), encoding="utf-8")
     return path
+
+
+def page_json(page: str, block: str) -> dict:
+    """The JSON data block ``block`` ("fig-data", "mesh-data") of a rendered report page."""
+    m = re.search(rf'<script type="application/json" id="{block}">(.*?)</script>', page, re.S)
+    assert m, f"{block} block missing"
+    return json.loads(m.group(1))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from report_fixtures import write_run  # noqa: E402
+from report_fixtures import page_json, write_run  # noqa: E402
 
 from ngtmc import report  # noqa: E402
 
@@ -24,15 +24,11 @@ def _ids(page: str) -> set[str]:
 
 
 def _fig_data(page: str) -> dict:
-    m = re.search(r'<script type="application/json" id="fig-data">(.*?)</script>', page, re.S)
-    assert m, "figure data block missing"
-    return json.loads(m.group(1))
+    return page_json(page, "fig-data")
 
 
 def _mesh_data(page: str) -> dict:
-    m = re.search(r'<script type="application/json" id="mesh-data">(.*?)</script>', page, re.S)
-    assert m, "mesh data block missing"
-    return json.loads(m.group(1))
+    return page_json(page, "mesh-data")
 
 
 def _external_refs(page: str) -> list[str]:

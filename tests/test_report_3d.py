@@ -8,8 +8,6 @@ loads and a section at y = 0.5 mm (the crack plane). Units: mm.
 """
 from __future__ import annotations
 
-import dataclasses
-import json
 import re
 import sys
 from pathlib import Path
@@ -18,11 +16,12 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from report_fixtures import write_run  # noqa: E402
+from report_fixtures import page_json, write_run  # noqa: E402
 from scenes import notched_plate  # noqa: E402
 
 import ngtmc  # noqa: E402
 from ngtmc import report  # noqa: E402
+from ngtmc.extrude import plane_strain_slab  # noqa: E402
 from ngtmc.report.figures import deformation_scale  # noqa: E402
 from ngtmc.report.figures3d import frames_3d, snapshot_figures_3d  # noqa: E402
 
@@ -32,24 +31,18 @@ MAX_BYTES = 10 * 1024 * 1024
 
 
 def _fig_data(page: str) -> dict:
-    m = re.search(r'<script type="application/json" id="fig-data">(.*?)</script>', page, re.S)
-    assert m, "figure data block missing"
-    return json.loads(m.group(1))
+    return page_json(page, "fig-data")
 
 
 def _mesh_data(page: str) -> dict:
-    m = re.search(r'<script type="application/json" id="mesh-data">(.*?)</script>', page, re.S)
-    assert m, "mesh data block missing"
-    return json.loads(m.group(1))
+    return page_json(page, "mesh-data")
 
 
 @pytest.fixture(scope="module")
 def slab_run(tmp_path_factory):
     """(run folder, page text, snapshots) of the 3D slab run, its report rendered."""
     sc2 = notched_plate(maxh=0.2, h_band=0.05, l0=0.1)
-    sc3 = dataclasses.replace(
-        sc2, mesh=ngtmc.extrude(sc2.mesh, THICKNESS, layers=2), thickness=None, name="slab",
-        supports=list(sc2.supports) + [ngtmc.Support("front", z=True), ngtmc.Support("back", z=True)])
+    sc3 = plane_strain_slab(sc2, THICKNESS, layers=2, name="slab")
     out = tmp_path_factory.mktemp("report3d") / "slabrun"
     ngtmc.simulate(sc3, 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=20.0 / THICKNESS), out_dir=out,
                    scheme="path-following", section=("y", 0.5), snapshot_loads=LOADS,

@@ -69,10 +69,20 @@ def _axis(title: str, **kw) -> dict:
     return ax
 
 
+def _title(text: str) -> dict:
+    """Title of a report figure: left-aligned, 15 pt."""
+    return {"text": text, "x": 0.01, "xanchor": "left", "font": {"size": 15}}
+
+
+def _font() -> dict:
+    """Text style of a report figure."""
+    return {"family": FONT, "size": 12, "color": "#222"}
+
+
 def _layout(title: str, xtitle: str, ytitle: str, height: int = 430, **kw) -> dict:
     lay = {
-        "title": {"text": title, "x": 0.01, "xanchor": "left", "font": {"size": 15}},
-        "font": {"family": FONT, "size": 12, "color": "#222"},
+        "title": _title(title),
+        "font": _font(),
         "paper_bgcolor": "#ffffff", "plot_bgcolor": "#ffffff",
         "xaxis": _axis(xtitle), "yaxis": _axis(ytitle),
         "height": height, "margin": {"l": 70, "r": 30, "t": 50, "b": 60},

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .figures import ALPHA_COLORSCALE, FONT, MAX_FRAMES, _frame_indices, deformation_scale
+from .figures import ALPHA_COLORSCALE, MAX_FRAMES, _font, _frame_indices, _title, deformation_scale
 from .numbers import fmt
 
 
@@ -63,10 +63,6 @@ def _slider(steps: list[dict], active: int) -> dict:
             "currentvalue": {"prefix": "applied displacement u = ", "suffix": " mm",
                              "font": {"size": 13}},
             "steps": steps}
-
-
-def _title(text: str) -> dict:
-    return {"text": text, "x": 0.01, "xanchor": "left", "font": {"size": 15}}
 
 
 def _arrays(snap: dict):
@@ -188,7 +184,7 @@ def fig_surface(snap: dict, label: str, frames: list[int]) -> tuple[dict, dict] 
              # y up (the height of the 2D scenes extruded along z), looking at the front face z = max
              "camera": {"up": {"x": 0, "y": 1, "z": 0}, "eye": {"x": 1.2, "y": 1.0, "z": 4.2}}}
     title = (f"Phase field α on the deformed surface – {label} (deformation scale: × {fmt(scale)})")
-    layout = {"title": _title(title), "font": {"family": FONT, "size": 12, "color": "#222"},
+    layout = {"title": _title(title), "font": _font(),
               "paper_bgcolor": "#ffffff", "height": 680, "margin": {"l": 10, "r": 10, "t": 50, "b": 90},
               "showlegend": False, "scene": scene, "uirevision": "surface",
               "sliders": [_slider(steps, len(frames) - 1)]}
@@ -245,7 +241,7 @@ def fig_section(snap: dict, label: str, frames: list[int]) -> tuple[dict, str] |
     axis_style = {"showgrid": False, "zeroline": False, "showline": True, "linecolor": "#444",
                   "mirror": True, "ticks": "outside", "constrain": "domain"}
     layout = {"title": _title(f"Phase field α in the plane {plane} – {label}"),
-              "font": {"family": FONT, "size": 12, "color": "#222"},
+              "font": _font(),
               "paper_bgcolor": "#ffffff", "plot_bgcolor": "#ffffff", "height": height,
               "margin": {"l": 70, "r": 30, "t": 50, "b": 110}, "showlegend": False,
               "xaxis": dict(axis_style, title={"text": f"{nx} (mm)"}),
