@@ -2,6 +2,7 @@
 
     >>> import ngtmc
     >>> slab = ngtmc.extrude(mesh2d, thickness=0.03)      # doctest: +SKIP
+    >>> twin = plane_strain_slab(scene2d, 0.03)            # doctest: +SKIP
 
 Each triangle becomes a column of ``layers`` prisms (each quadrilateral a column of hexahedra)
 between z = 0 and z = ``thickness`` (mm). The regions keep their names; each named boundary
@@ -22,13 +23,13 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
-__all__ = ["extrude"]
+__all__ = ["extrude", "plane_strain_slab"]
 
 
 def extrude(mesh, thickness: float, layers: int = 1, front: str = "front", back: str = "back") -> ngs.Mesh:
     """The slab of ``mesh`` (2D, mm) extruded by ``thickness`` (mm) in ``layers`` element layers
     along z: prisms from triangles, hexahedra from quadrilaterals (see the module docstring)."""
-    from netgen.meshing import Element2D, Element3D, FaceDescriptor, MeshPoint, Pnt
+    from netgen.meshing import Element2D, Element3D, FaceDescriptor, MeshPoint, Pnt, PointId
     from netgen.meshing import Mesh as NgMesh
 
     if mesh.dim != 2:
@@ -59,7 +60,6 @@ def extrude(mesh, thickness: float, layers: int = 1, front: str = "front", back:
         return faces[key]
 
     def pid(v: int, k: int):
-        from netgen.meshing import PointId
         return PointId(k * nv + v + 1)
 
     # the elements on each side of every edge, to give each face its regions
@@ -83,3 +83,16 @@ def extrude(mesh, thickness: float, layers: int = 1, front: str = "front", back:
         for k in range(layers):
             out.Add(Element2D(face(name, inside, outside), [pid(a, k), pid(b, k), pid(b, k + 1), pid(a, k + 1)]))
     return ngs.Mesh(out)
+
+
+def plane_strain_slab(scene, thickness: float, layers: int = 1, name: str | None = None):
+    """The 3D twin of a 2D ``scene``: its mesh extruded by ``thickness`` (mm, :func:`extrude`),
+    u_z held on ``front`` and ``back`` (plane strain), everything else as in ``scene``. Its
+    forces and energies are those of the 2D scene for a thickness of ``thickness``."""
+    import dataclasses
+    from .scene import Support
+    if scene.mesh.dim != 2:
+        raise ValueError(f"plane_strain_slab needs a 2D scene; this one has dimension {scene.mesh.dim}")
+    return dataclasses.replace(scene, mesh=extrude(scene.mesh, thickness, layers), thickness=None,
+                               supports=list(scene.supports) + [Support("front", z=True), Support("back", z=True)],
+                               name=name or scene.name)

@@ -144,13 +144,12 @@ RESOLUTIONS = {
               "sphere_h_contact": 0.01, "sphere_h_band": 0.02, "sphere_h_void": 0.03, "sphere_h_indenter": 0.05, "sphere_h_beam": 0.15,
               "sphere_du_max": 1e-3, "sphere_stop_load": 0.1},
 }
+#: the slab's sizes: those of the 2D study
+_SLAB_RESOLUTION_KEYS = ("h_band", "h_void", "h_indenter", "h_beam", "du_max", "stop_load")
 RESOLUTION_PARAMETERS = {
-    "h_band": ("mm", "slab: element size in the band above the notch"),
-    "h_void": ("mm", "slab: element size in the void"),
-    "h_indenter": ("mm", "slab: element size in the indenter"),
-    "h_beam": ("mm", "slab: element size in the rest of the beam"),
+    **{k: (_tpb.RESOLUTION_PARAMETERS[k][0], "slab: " + _tpb.RESOLUTION_PARAMETERS[k][1])
+       for k in _SLAB_RESOLUTION_KEYS if k != "stop_load"},
     "slab_thickness": ("mm", "slab: thickness of the one layer of prisms (about h_band)"),
-    "du_max": ("mm", "slab: largest displacement step"),
     "stop_load": ("mm", "slab: load at which the slab and its 2D twin stop (after the drop)"),
     "sphere_h_band": ("mm", "hemisphere: element size in the block above the notch"),
     "sphere_h_void": ("mm", "hemisphere: element size in the void"),
@@ -203,7 +202,7 @@ def check_parameters(p: dict):
 def _slab_parameters(p: dict) -> dict:
     """The 2D study's parameter dict for the slab (its physics, the slab's sizes)."""
     return {**{k: p[k] for k in _SLAB_KEYS if k in p}, **{k: p[k] for k in SOLVER_PARAMETERS if k in p},
-            **{k: p[k] for k in ("h_band", "h_void", "h_indenter", "h_beam", "du_max", "stop_load")},
+            **{k: p[k] for k in _SLAB_RESOLUTION_KEYS},
             "thickness": float(p["slab_thickness"])}
 
 
@@ -211,17 +210,13 @@ def build_plane_strain_scene(p: dict) -> ngtmc.Scene:
     """The 2D three-point-bending scene on its straight-sided mesh, thickness ``slab_thickness``."""
     scene = _tpb.build_scene(_slab_parameters(p))
     scene.mesh.Curve(1)
-    return dataclasses.replace(scene, thickness=float(p["slab_thickness"]), name="plane_strain_2d")
+    return dataclasses.replace(scene, name="plane_strain_2d")
 
 
 def build_slab_scene(p: dict) -> ngtmc.Scene:
     """The 2D scene's mesh extruded into one layer of prisms, u_z held on ``front`` and ``back``."""
-    scene = _tpb.build_scene(_slab_parameters(p))
-    scene.mesh.Curve(1)
-    return dataclasses.replace(scene, mesh=ngtmc.extrude(scene.mesh, float(p["slab_thickness"])), thickness=None,
-                               supports=list(scene.supports) + [ngtmc.Support("front", z=True),
-                                                                ngtmc.Support("back", z=True)],
-                               name="slab")
+    from ngtmc.extrude import plane_strain_slab
+    return plane_strain_slab(build_plane_strain_scene(p), float(p["slab_thickness"]), name="slab")
 
 
 def build_hemisphere_scene(p: dict) -> ngtmc.Scene:
@@ -250,7 +245,7 @@ def cases(p: dict) -> list[Case]:
         stop = min(float(p["stop_load"]), float(p["final_load"]))
         control = ngtmc.AdaptiveStepControl(du_max=float(p["du_max"]), k_u=float(p["k_u"]),
                                             du_min=min(float(p["du_min"]), float(p["du_max"])))
-        snaps = [x for x in (0.05, 0.08, 0.09, 0.1, 0.11, 0.12) if x <= stop + 1e-12]
+        snaps = [x for x in _tpb.SNAPSHOT_LOADS if x <= stop + 1e-12]   # and the last step, as every case
         out.append(Case(name="plane_strain_2d", label="2D, plane strain, same mesh in the plane",
                         scene=partial(build_plane_strain_scene, dict(p)), schedule=ngtmc.Schedule.monotonic(stop),
                         control=control, options=dict(opts), snapshot_loads=snaps, cost=1.0))
