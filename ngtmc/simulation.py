@@ -5,25 +5,15 @@
     result.history          # pandas DataFrame, one row per accepted step
     result.units            # column -> unit
 
-Each accepted step solves the equations of the step by one of three schemes (``scheme=``):
-
-* ``"single-pass"``: the paper's scheme of :mod:`ngtmc.solver`: alpha from H_{n-1}, Newton for u,
-  history update, once per step; damage lags one step behind the displacement;
-* ``"staggered"``: the same pass repeated at the same load until alpha changes by less than
-  ``staggered_tol`` (alternate minimisation; converged damage, many passes while a crack runs);
-* ``"monolithic"``: Newton on (u, alpha) together with the history of the step inside the
-  iteration and alpha >= alpha_{n-1} as an active set (:mod:`ngtmc.coupled`); converged damage.
-* ``"path-following"``: the monolithic Newton with the load as an unknown where the crack grows
-  (dissipation control, :mod:`ngtmc.path`): a crack that runs unstably is followed through its
-  snap-back in steps of a prescribed crack advance; ``"monolithic"`` with
-  ``coupled={"path": "dissipation"}``.
+Each accepted step solves the equations of the step by one of four schemes (``scheme=``:
+``"single-pass"``, the paper's, ``"staggered"``, ``"monolithic"`` and ``"path-following"``), described
+and implemented in :mod:`ngtmc.schemes`, the base of :class:`Simulation`.
 
 A step that fails (Newton does not converge) is retried with half the increment; a run that fails
 at the minimum increment raises :class:`StepFailure`, which carries the history recorded so far.
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 import math
@@ -35,22 +25,15 @@ import pandas as pd
 
 from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak
 from .scene import Scene
+from .schemes import PATH_STEPS, SCHEMES, StepSchemes
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ControlState, Schedule
 
-__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "simulate"]
-
-#: Solution schemes of a load step (see the module docstring).
-SCHEMES = ("single-pass", "staggered", "monolithic", "path-following")
+__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "PATH_STEPS", "simulate"]
 
 #: Units of the history columns (force and energies are for the scene thickness in 2D); defined
 #: once, in :mod:`ngtmc.runfiles`.
 HISTORY_UNITS = _HISTORY_UNITS
-
-
-#: Under path following, displacement steps are at most 1/PATH_STEPS of the load path
-#: (``Schedule.total_time``, mm) unless ``coupled={"du_max": ...}`` says otherwise.
-PATH_STEPS = 50
 
 
 class StepFailure(RuntimeError):
@@ -90,7 +73,7 @@ class SimulationResult:
         return math.nan if x is None else x
 
 
-class Simulation:
+class Simulation(StepSchemes):
     """Load-stepping run of a scene (see the module docstring).
 
     Parameters
@@ -101,7 +84,7 @@ class Simulation:
     control : AdaptiveStepControl, optional
         Step-size rule; default constant steps of 1/20 of the first segment.
     scheme : "single-pass", "staggered", "monolithic" or "path-following"
-        How the equations of a step are solved (see the module docstring).
+        How the equations of a step are solved (:mod:`ngtmc.schemes`).
     staggered_tol : float
         Largest change of alpha between two passes for "staggered", dimensionless.
     max_staggered : int
@@ -150,10 +133,7 @@ class Simulation:
                             f"or None for constant steps; got {type(control).__name__}{hint}")
         if control is None:
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
-        if scheme not in SCHEMES:
-            raise ValueError(f"scheme = {scheme!r} is not one of {', '.join(map(repr, SCHEMES))}")
-        if not (staggered_tol > 0):
-            raise ValueError(f"staggered_tol = {staggered_tol!r} must be > 0")
+        self._check_scheme(scheme, staggered_tol)
         if adapt is not None:
             from .adapt import Adaptivity, private_scene
             if not isinstance(adapt, Adaptivity):
@@ -163,9 +143,6 @@ class Simulation:
         self.scene = scene
         self.schedule = schedule
         self.control = control
-        self.scheme = scheme
-        self.staggered_tol = float(staggered_tol)
-        self.max_staggered = int(max_staggered)
         self.progress = progress
         self.max_steps = int(max_steps)
         self.solver = Solver(scene, newton=newton, compile=compile)
@@ -174,48 +151,7 @@ class Simulation:
             check_solver(self.solver)
         #: refinements of the run (:class:`ngtmc.adapt.RefinementRecord`, with the step they followed)
         self.refinements: list = []
-        self.coupled = None
-        copt = dict(coupled or {})
-        if scheme == "path-following":
-            copt.setdefault("path", "dissipation")
-        self.fallback_passes = int(copt.pop("fallback_passes", 400))
-        self.newton_every = int(copt.pop("newton_every", 10))
-        self.fallback = str(copt.pop("fallback", "staggered"))
-        if self.fallback not in ("single-pass", "staggered", "capped"):
-            raise ValueError(f"coupled fallback = {self.fallback!r} is not one of 'single-pass', 'staggered', 'capped'")
-        self.damage_cap = float(copt.pop("damage_cap", 0.25))
-        self.max_substeps = int(copt.pop("max_substeps", 200))
-        self.path = copt.pop("path", None)
-        if self.path not in (None, "dissipation"):
-            raise ValueError(f"coupled path = {self.path!r} is not one of None (load control), 'dissipation'")
-        self.crack_advance = copt.pop("crack_advance", None)
-        self.crack_front = copt.pop("crack_front", None)
-        if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
-            raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
-                             "(in 2D the dissipation is per mm of thickness)")
-        path_du_max = copt.pop("du_max", None)
-        if self.crack_advance is not None and not (float(self.crack_advance) > 0):
-            raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
-        self._coupled_options = dict(copt)
-        if scheme in ("monolithic", "path-following") and self.solver.alpha is not None:
-            from .coupled import CoupledNewton
-            self.coupled = CoupledNewton(self.solver, **copt)
-        self._path = None
-        if self.coupled is not None and self.path == "dissipation":
-            from .path import DissipationPath
-            self._path = DissipationPath(self, self.crack_advance, self.crack_front)
-            # a displacement step of the monolithic scheme carries no lag, so its size does not set
-            # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
-            # by the du_max of the lagged schemes' Eq. 20
-            if path_du_max is None:
-                path_du_max = max(control.du_max, schedule.total_time / PATH_STEPS)
-            from .materials import check_number
-            check_number("coupled du_max (largest load increment under path following)", path_du_max, "mm")
-            if not float(path_du_max) >= control.du_min:
-                raise ValueError(f"coupled du_max = {path_du_max!r} mm must be >= du_min = {control.du_min} mm")
-            self.control = control = dataclasses.replace(control, du_max=float(path_du_max))
-        elif path_du_max is not None:
-            raise ValueError("coupled du_max applies to path following only (scheme='path-following')")
+        self.control = control = self._init_scheme(scheme, staggered_tol, max_staggered, coupled, control)
         self.t = 0.0
         self.step = 0
         self.rows: list[dict] = []
@@ -283,156 +219,6 @@ class Simulation:
         return self.t >= self.schedule.total_time * (1 - 1e-14)
 
     # ------------------------------------------------------------------ one step
-    def _attempt(self, t_new: float):
-        """Try the step to pseudo-time t_new. Returns (ok, info dict)."""
-        load = self.schedule.load(t_new)
-        if self._path is not None:
-            return self._path.attempt(t_new)
-        if self.coupled is not None:
-            return self._attempt_monolithic(load)
-        return self._passes(load, 1 if self.scheme == "single-pass" else self.max_staggered)
-
-    def _passes(self, load: float, max_passes: int, info: dict | None = None, newton_every: int = 0):
-        """alpha-u-H passes at a fixed load (Sect. 4 of MODEL.md): alpha from the latest history,
-        Newton for u, history. One pass is the paper's scheme; several, until alpha changes by
-        less than ``staggered_tol``, the converged staggered scheme. ``newton_every`` > 0 tries the
-        coupled Newton from the current iterate after that many passes, then after twice as many
-        passes each time, and stops when it converges (the fallback of the monolithic scheme). Returns (ok, info dict)."""
-        s = self.solver
-        info = info if info is not None else {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
-        info.update(staggered_iterations=0, projected=0)
-        H_trial = s.H_committed
-        alpha_prev_pass = None
-        passes = 0
-        next_newton = newton_every
-
-        def fail(message):
-            info.update(message=message, staggered_iterations=passes)
-            return False, info
-
-        if max_passes < 1:
-            return fail("no staggered passes allowed")
-        for passes in range(1, max_passes + 1):
-            info["projected"] = s.solve_phase_field(H_trial)
-            if s.alpha is not None and alpha_prev_pass is not None:
-                change = float(np.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass)))
-                if change <= self.staggered_tol:
-                    # alpha from the latest H agrees with the one u is in equilibrium with: keep u
-                    s.alpha.vec.FV().NumPy()[:] = alpha_prev_pass
-                    passes -= 1
-                    break
-            res = s.solve_displacement(load)
-            self._add(info, res)
-            if not res.converged:
-                return fail(res.message)
-            if s.alpha is None:
-                break  # nothing may break: no history to keep
-            H_trial = s.trial_history()
-            if not np.all(np.isfinite(H_trial)):
-                return fail("history not finite (J <= 0 at a history point)")
-            if max_passes == 1:
-                break
-            if newton_every and passes >= next_newton:
-                next_newton = 2 * passes  # retries at 10, 20, 40, ... passes
-                ok, _ = self._coupled_newton(load, info)
-                if ok:
-                    info["staggered_iterations"] = passes
-                    return True, info
-            alpha_prev_pass = s.alpha.vec.FV().NumPy().copy()
-        else:
-            if max_passes > 1 and s.alpha is not None:
-                return fail(f"staggered passes did not converge in {max_passes}")
-        info.update(staggered_iterations=max(passes, 1), H_trial=H_trial)
-        return True, info
-
-    @staticmethod
-    def _add(info, res):
-        info["newton_iterations"] += res.iterations
-        info["solve_time"] += res.solve_time
-        info["assembly_time"] += res.assembly_time
-
-    def _coupled_newton(self, load: float, info: dict, alpha_upper=None):
-        """Coupled Newton from the current (u, alpha); on failure the iterate is restored."""
-        s = self.solver
-        keep = s.get_state()
-        res = self.coupled.solve(load, alpha_upper)
-        self._add(info, res)
-        if res.converged:
-            s._r_valid = False
-            H_trial = s.trial_history()
-            if np.all(np.isfinite(H_trial)):
-                info["H_trial"] = H_trial
-                return True, info
-            res.message = "history not finite (J <= 0 at a history point)"
-        s.set_state(keep)
-        info["message"] = res.message
-        return False, info
-
-    def _attempt_monolithic(self, load: float):
-        """Monolithic step: a predictor (Newton for u with alpha_{n-1}, the robust energy-guarded
-        solver of the contact problem), then the coupled Newton on (u, alpha).
-
-        Where the coupled Newton fails (a crack that runs unstably at this load has no nearby
-        solution, or the hybrid coupling of nearly broken elements defeats it), the step falls
-        back according to ``coupled["fallback"]``:
-
-        * "staggered" (default): staggered passes at the same load, the coupled Newton tried
-          again after ``newton_every``, 2 ``newton_every``, 4 ``newton_every``, ... passes; the
-          step stays converged (``staggered_iterations`` counts the passes, 0 for a step of the
-          coupled Newton alone);
-        * "single-pass": the paper's single pass from the state of the last step, so the crack
-          runs through lagged steps as in the paper and the coupled Newton takes over again at the
-          next step;
-        * "capped": coupled sub-steps with a capped damage increase (``_capped_substeps``), then
-          staggered passes.
-
-        Measured on the notched plate (tests/test_monolithic.py) and the three-point bending:
-        docs/performance.md."""
-        s = self.solver
-        saved = s.get_state() if self.fallback == "single-pass" else None
-        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
-                "projected": 0}
-        res = s.solve_displacement(load)
-        self._add(info, res)
-        if not res.converged:
-            info["message"] = res.message
-            return False, info
-        ok, info = self._coupled_newton(load, info)
-        if ok:
-            return True, info
-        if self.fallback == "single-pass":
-            s.set_state(saved)
-            return self._passes(load, 1, info)
-        if self.fallback == "capped":
-            ok, info = self._capped_substeps(load, info)
-            if ok:
-                return True, info
-        return self._passes(load, self.fallback_passes, info, newton_every=self.newton_every)
-
-    def _capped_substeps(self, load: float, info: dict):
-        """Carry a crack that runs at this load by coupled sub-steps whose damage increase is capped:
-        sub-step k solves the coupled equations with alpha <= alpha^(k-1) + cap (still alpha >=
-        alpha_{n-1}); the crack advances by at most ``cap`` per dof and sub-step, so each sub-step
-        has a nearby solution. It ends when no cap binds (the state is then the equilibrium of the
-        step, as for the uncapped Newton); a failing sub-step halves the cap down to cap / 16."""
-        s = self.solver
-        cap = self.damage_cap
-        substeps = 0
-        while substeps < self.max_substeps:
-            upper = s.alpha.vec.FV().NumPy() + cap
-            ok, info = self._coupled_newton(load, info, upper)
-            if not ok:
-                cap /= 2.0
-                if cap < self.damage_cap / 16:
-                    info["message"] = f"capped coupled sub-steps failed ({info.get('message', '')})"
-                    return False, info
-                continue
-            substeps += 1
-            info["substeps"] = substeps
-            if not self.coupled.cap_binding:
-                return True, info
-        info["message"] = f"capped coupled sub-steps: no equilibrium in {self.max_substeps} sub-steps"
-        return False, info
 
     def advance(self) -> dict:
         """Take one accepted step (with cut-backs as needed); return its history row.
