@@ -34,11 +34,16 @@ from .scene import DisplacementField, DisplacementLoad, Point, Scene, Support, T
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
 
+#: Mesh size (elements) from which compile="auto" generates C++ code for the energies.
+AUTO_REAL_COMPILE_ELEMENTS = 5000
+#: Displacement dofs from which compile="auto" generates C++ code for the energies, whatever the
+#: number of elements: a 3D element costs several times a triangle (the quick 3D slab: 2613
+#: prisms, 15357 dofs, assembly 0.84 s compiled symbolically, 0.37 s as C++; docs/performance.md).
+AUTO_REAL_COMPILE_DOFS = 10000
+
 #: Parts of the solution procedure timed in ``Solver.timings`` (seconds, accumulated): tangent
 #: assembly, residual evaluation, factorization, triangular solves, line search (trial energies,
 #: residuals and J guard), phase-field solve, history update, and recording of a step's row.
-#: Mesh size (elements) from which compile="auto" generates C++ code for the energies.
-AUTO_REAL_COMPILE_ELEMENTS = 5000
 
 #: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
 DISPLACEMENT_RTOL = 1e-8
@@ -107,7 +112,8 @@ class Solver:
     compilation per energy expression, 5 expressions and 17 s for the quick three-point bending,
     so worth it for runs of more than a minute; falls back to True with
     a warning where no C++ compiler is available), False evaluates them uncompiled, "auto" (default)
-    chooses "real" on meshes of at least AUTO_REAL_COMPILE_ELEMENTS elements and True below.
+    chooses "real" on meshes of at least AUTO_REAL_COMPILE_ELEMENTS elements or
+    AUTO_REAL_COMPILE_DOFS displacement dofs, and True below.
     """
 
     def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool | str = "auto"):
@@ -118,9 +124,6 @@ class Solver:
         self.mesh = mesh = scene.mesh
         self.dim = d = mesh.dim
         self.order = p = scene.displacement_order
-        if compile == "auto":  # C++ code generation pays off on larger meshes only
-            compile = "real" if scene.mesh.ne >= AUTO_REAL_COMPILE_ELEMENTS else True
-        self._compile = compile
         self._compiled = {}  # id(cf) -> (cf, compiled) of _maybe_compile
         self.thickness = float(scene.thickness) if d == 2 else 1.0
 
@@ -144,6 +147,10 @@ class Solver:
         #: number of times the mesh changed under this solver (:meth:`mesh_changed`, adaptive refinement)
         self.mesh_generation = 0
         self._apply_orders()
+        if compile == "auto":  # C++ code generation pays off on larger meshes only
+            big = mesh.ne >= AUTO_REAL_COMPILE_ELEMENTS or self.fes_u.ndof >= AUTO_REAL_COMPILE_DOFS
+            compile = "real" if big else True
+        self._compile = compile
         self.u = ngs.GridFunction(self.fes_u, name="displacement")
         self._free_dofs()
 
