@@ -189,9 +189,14 @@ most 1 %. Ambati's own combination (window, spectral, hybrid) peaks at 38.77 N/m
 falls by 14 % (window) and 29 % (indenter); the anisotropic formulation (spectral) adds
 2.0-2.1 % (39.82 N/mm with the indenter, -5.2 %).
 
-**The notch shape moves the peak most, the narrower the tip the higher:** a V-notch +7.6 %
+**The notch shape moves the peak most: the V-notch, not a narrower tip:** a V-notch +7.6 %
 (indenter, 41.70 N/mm) and +9.8 % (window, 42.29 N/mm at 0.0471 mm: Ambati's 42 at 0.046 to
-+0.7 % and +2.3 %), a 0.015 mm slit +2.4 % and +3.0 %; the slope by under 1 %. The gain shrinks
++0.7 % and +2.3 %), a 0.015 mm slit +2.4 % and +3.0 %; the slope by under 1 %. With path
+following (window, quick, 2026-12-02) flat notches 0.06, 0.03, 0.015 and 0.0075 mm wide peak at
+38.03, 37.17, 38.32 and 38.05 N/mm (within 1.6 %, no trend with the width), the V-notch at 41.20
+N/mm: as a flat notch about 0.07 mm (2.5 l0) shallower (depths 0.40, 0.38, 0.35 mm: 37.17, 38.23,
+39.91 N/mm). At equal load and force (within 0.7 %) its tip damages more slowly than the
+0.0075 mm slit's (max alpha 0.32 against 0.42 at 0.04 mm); docs/fidelity.md. The gain shrinks
 as the mesh refines (window, V against flat: +9.8 %, +7.2 %, +6.3 % at quick, medium, paper; at
 paper 40.04 against 37.66 N/mm, -4.7 % and -10.3 % from Ambati; indenter: +7.6 %, +7.2 % at
 quick, medium). **Fracture excluded under the
