@@ -289,7 +289,7 @@ class CoupledNewton:
         """Solve step ``load`` (imposed displacement, mm) from the current (u, alpha).
 
         ``alpha_upper``: upper bounds of alpha per dof (default 1). A bound below 1 caps the damage
-        increment of a sub-step (see :meth:`ngtmc.simulation.Simulation._attempt_monolithic`);
+        increment of a sub-step (see :meth:`ngtmc.schemes.StepSchemes._attempt_monolithic`);
         after a converged solve, :attr:`cap_binding` tells whether a cap below 1 is active (the
         crack wants to grow further at this load). On success the solver holds the converged u and
         alpha (H not committed). On failure it holds the last iterate; the caller restores its

@@ -94,6 +94,13 @@ GROWTH_CEILING_STEPS = 16
 #: more steps and iterations than with 1 (docs/performance.md).
 CEILING_MIN = 0.5
 
+#: Fractions of the secant extrapolation tried, in turn, for the predictor of a step: the first
+#: that keeps J > 0 everywhere is taken; if none does, the step starts from the u solve with
+#: alpha_{n-1}. Where the void under a contact is squeezed to J of about 1e-3, the full secant
+#: inverts elements there, and the u solve then took 6-9 Newton iterations per step (the 3D
+#: hemisphere; docs/three-d.md).
+SECANT_DAMPING = (1.0, 0.5, 0.25)
+
 
 class DissipationPath:
     """Step rule of the path-following monolithic scheme (module docstring) for a
@@ -181,7 +188,7 @@ class DissipationPath:
 
     def attempt(self, t_new: float):
         """One attempt of a step towards pseudo-time ``t_new`` (the step control's proposal);
-        returns (ok, info) as :meth:`Simulation._attempt`, with ``info["t_new"]`` the pseudo-time
+        returns (ok, info) as :meth:`ngtmc.schemes.StepSchemes._attempt`, with ``info["t_new"]`` the pseudo-time
         reached (may be below ``t_new``, or below the last step's after a snap-back)."""
         sim, s = self.sim, self.sim.solver
         sch = sim.schedule
@@ -353,13 +360,17 @@ class DissipationPath:
             load = self.load_n + ratio * (self.load_n - self.load_prev)
         uN = s.u.vec.FV().NumPy()
         keep_u = uN.copy()
-        uN[:] = u_n + ratio * (u_n - u_p)
         dirm = s._dir_np
-        uN[dirm] = s.dirichlet_target(load)[dirm]
-        if not (np.all(np.isfinite(uN)) and s.min_J() > 0.0):
+        target = s.dirichlet_target(load)[dirm]
+        for damping in SECANT_DAMPING:
+            uN[:] = u_n + damping * ratio * (u_n - u_p)
+            uN[dirm] = target
+            if np.all(np.isfinite(uN)) and s.min_J() > 0.0:
+                break
+        else:
             uN[:] = keep_u
             return None
-        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + ratio * (a_n - a_p), a_n, 1.0)
+        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + damping * ratio * (a_n - a_p), a_n, 1.0)
         s._r_valid = False
         return load
 

@@ -220,3 +220,40 @@ def test_the_step_controls_scale_halves_the_dissipation_step_only_within_a_step(
     path._scale_ref = sim.control_state.scale
     assert path.target == pytest.approx(base / 2)
     assert path.get_state()["scale_ref"] == 1.0
+
+
+def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
+    """Where the full secant through the last two states would invert an element (min J <= 0:
+    a squeezed void), the predictor takes the first fraction of it in SECANT_DAMPING that keeps
+    J > 0: here the full secant is refused once, so the predictor is u_n + 0.5 (u_n - u_{n-1}) on
+    the free dofs, the boundary values those of the step's load, and alpha as extrapolated by
+    half, kept in [alpha_n, 1]. If every fraction inverts, the state is left as it was."""
+    from ngtmc.path import SECANT_DAMPING
+    assert SECANT_DAMPING[0] == 1.0 and SECANT_DAMPING[1] == 0.5
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    sim.advance()
+    sim.advance()
+    path, s = sim._path, sim.solver
+    (u_n, a_n), (u_p, a_p) = path.x_n, path.x_prev
+    load = path.load_n + (path.load_n - path.load_prev)
+    real_min_J = s.min_J
+    calls = []
+
+    def min_J_refusing_the_full_secant():
+        calls.append(1)
+        return -1.0 if len(calls) == 1 else real_min_J()
+
+    monkeypatch.setattr(s, "min_J", min_J_refusing_the_full_secant)
+    assert path._secant(1.0, load) == load
+    assert len(calls) == 2
+    uN = s.u.vec.FV().NumPy()
+    free = s._free_np
+    np.testing.assert_allclose(uN[free], (u_n + 0.5 * (u_n - u_p))[free], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(uN[~free], s.dirichlet_target(load)[~free], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(s.alpha.vec.FV().NumPy(), np.clip(a_n + 0.5 * (a_n - a_p), a_n, 1.0), atol=1e-15)
+
+    before = uN.copy()
+    monkeypatch.setattr(s, "min_J", lambda: -1.0)
+    assert path._secant(1.0, load) is None
+    np.testing.assert_array_equal(s.u.vec.FV().NumPy(), before)
