@@ -34,7 +34,6 @@ import time
 import numpy as np
 import ngsolve as ngs
 
-from . import fracture
 from .materials import deformation_gradient
 from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
 from .discretisation import bilinear_form, rules

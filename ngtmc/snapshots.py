@@ -15,7 +15,6 @@ import sys
 
 import numpy as np
 
-from .runfiles import write_atomic
 from .study import Case
 from .vtk import VtkWriter, write_pvd
 
