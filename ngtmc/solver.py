@@ -8,7 +8,9 @@ One load step of the paper's scheme (Sect. "Numerical implementation") is, with 
    indefinite, and the Dirichlet increment carried by the Newton increment);
 3. :meth:`Solver.update_history`: H_n = max(H_{n-1}, Psi_plus(u_n)) at the quadrature points.
 
-:mod:`ngtmc.simulation` drives these through a load schedule.
+:mod:`ngtmc.simulation` drives these through a load schedule. Two parts of :class:`Solver` live in
+modules of their own, as its bases: the displacement Newton (:mod:`ngtmc.displacement_newton`) and
+the boundary conditions and reactions (:mod:`ngtmc.boundary_conditions`).
 
 Units: mm, N, MPa. Forces and energies returned by this module are for the scene thickness in 2D.
 """
@@ -16,8 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from dataclasses import dataclass
-import math
 import re
 import time
 
@@ -30,10 +30,11 @@ from . import fracture
 from . import splits
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
 from .boundary_conditions import BoundaryConditions
+from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
 from .scene import Point, Scene, Support, Traction, _names
 
-__all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS"]
+__all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
 
 #: Mesh size (elements) from which compile="auto" generates C++ code for the energies.
 AUTO_REAL_COMPILE_ELEMENTS = 5000
@@ -45,63 +46,14 @@ AUTO_REAL_COMPILE_DOFS = 10000
 #: Parts of the solution procedure timed in ``Solver.timings`` (seconds, accumulated): tangent
 #: assembly, residual evaluation, factorization, triangular solves, line search (trial energies,
 #: residuals and J guard), phase-field solve, history update, and recording of a step's row.
-
-#: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
-DISPLACEMENT_RTOL = 1e-8
-
 TIMING_KEYS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
-
-
-@dataclass
-class NewtonOptions:
-    """Options of the displacement Newton solver.
-
-    max_iterations: iterations before the attempt counts as failed (the step is then halved);
-    rtol: residual norm relative to the reaction-force scale (None: each Newton solver's own
-    default, DISPLACEMENT_RTOL for the displacement Newton and ``ngtmc.coupled.COUPLED_RTOL`` for
-    the coupled Newton of the monolithic schemes); atol: absolute residual norm, N
-    (None: 1e-12 E_max L^(d-1), L the diagonal of the mesh's bounding box); armijo: sufficient
-    decrease constant; max_line_search: halvings of the step length before giving up;
-    linear_solver: "sparsecholesky" (symmetric tangents, fastest) or "umfpack".
-    """
-
-    max_iterations: int = 25
-    rtol: float | None = None
-    atol: float | None = None
-    armijo: float = 1e-4
-    max_line_search: int = 12
-    linear_solver: str = "sparsecholesky"
-
-    def __post_init__(self):
-        if self.linear_solver not in ("sparsecholesky", "umfpack", "pardiso"):
-            raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
-        if int(self.max_iterations) < 1:
-            raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
-        if self.rtol is not None and not (0 < self.rtol < 1):
-            raise ValueError(f"rtol = {self.rtol!r} is outside the allowed range (0, 1)")
-
-
-@dataclass
-class NewtonResult:
-    """Outcome of one displacement solve."""
-
-    converged: bool
-    iterations: int
-    residual: float
-    solve_time: float
-    assembly_time: float
-    shifted: int = 0
-    message: str = ""
-
-
-_DEBUG = False
 
 
 def _regex(names):
     return "|".join(names)
 
 
-class Solver(BoundaryConditions):
+class Solver(BoundaryConditions, DisplacementNewton):
     """Fields and solvers of a :class:`~ngtmc.scene.Scene`.
 
     Attributes worth knowing: ``u`` (displacement GridFunction, mm), ``alpha`` (phase field
@@ -471,173 +423,6 @@ class Solver(BoundaryConditions):
             pts = pts[sorted({v.nr for el in mesh.Elements(ngs.VOL) if re.fullmatch(self._frac_re, el.mat)
                               for v in el.vertices})]
         return pts.min(axis=0), pts.max(axis=0)
-
-    # ================================================================= displacement Newton
-    def _factorize(self, a):
-        if a is self.a_u:
-            if self._inv is None:
-                self._inv = a.mat.Inverse(self.free, inverse=self.newton.linear_solver)
-            else:
-                self._inv.Update()
-            return self._inv
-        return a.mat.Inverse(self.free, inverse=self.newton.linear_solver)
-
-    def _energy(self, vec) -> float:
-        try:
-            e = self.a_u.Energy(vec)
-        except Exception:  # pragma: no cover - NGSolve raises on some invalid states
-            return math.nan
-        return e
-
-    def _shift_form(self):
-        if self._a_shift is None:
-            self._mu = ngs.Parameter(0.0)
-            self._u_anchor = ngs.GridFunction(self.fes_u)
-            uT = self.fes_u.TrialFunction()
-            extra = 0.5 * self._mu * ngs.InnerProduct(uT - self._u_anchor, uT - self._u_anchor) * ngs.dx
-            self._a_shift = self._energy_form(uT, extra=extra)
-        return self._a_shift
-
-    def solve_displacement(self, load: float) -> NewtonResult:
-        """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed.
-
-        The Dirichlet increment is carried by the Newton increment (never written into u
-        directly, which would invert boundary elements). Steps are accepted only if the energy
-        is finite (which fails as soon as J <= 0 at one quadrature point); once the boundary
-        values are reached, steps must also decrease the energy (Armijo). If the tangent is not
-        a descent direction (indefinite tangent in a squeezed void), it is shifted by mu M with M
-        the mass matrix, mu raised by tenfold until the direction descends. On failure u is left
-        at the last iterate; the caller restores the state."""
-        opt = self.newton
-        rtol = self.displacement_rtol
-        u = self.u.vec
-        r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
-        self._r_valid = False
-        uN = u.FV().NumPy()
-        target = self.dirichlet_target(load)
-        self._lam_ext = load
-        solve_time = 0.0
-        assembly_time = 0.0
-        shifted = 0
-        r_ref = 0.0
-        res = math.inf
-        tm = self.timings
-        for it in range(1, opt.max_iterations + 1):
-            t0 = time.perf_counter()
-            self.a_u.Apply(u, r)
-            tm["residual"] += time.perf_counter() - t0
-            rN = r.FV().NumPy()
-            rem = np.where(self._dir_np, target - uN, 0.0)
-            lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
-            res = float(np.linalg.norm(rN[self._free_np]))
-            reac = float(np.linalg.norm(rN[self._dir_np]))
-            if not np.isfinite(res):
-                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
-            if _DEBUG:
-                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} r_ref {r_ref:.3e} tol {rtol * max(reac, r_ref) + opt.atol:.3e}")
-            if not lifted:
-                if r_ref == 0.0:
-                    r_ref = res
-                if res <= rtol * max(reac, r_ref) + opt.atol:
-                    self.load = load
-                    self._r_valid = True
-                    return NewtonResult(True, it - 1, res, solve_time, assembly_time, shifted)
-            t0 = time.perf_counter()
-            self.a_u.AssembleLinearization(u)
-            assembly_time += time.perf_counter() - t0
-            tm["assembly"] += time.perf_counter() - t0
-            t0 = time.perf_counter()
-            inv = self._factorize(self.a_u)
-            t1 = time.perf_counter()
-            wN = w.FV().NumPy()
-            wN[:] = rem
-            tmp.data = r + self.a_u.mat * w
-            du.data = inv * tmp
-            duN = du.FV().NumPy()
-            duN[:] = np.where(self._dir_np, rem, -duN)
-            t2 = time.perf_counter()
-            solve_time += t2 - t0
-            tm["factorization"] += t1 - t0
-            tm["solve"] += t2 - t1
-            t_ls = time.perf_counter()
-            E0 = math.nan if lifted else self._energy(u)  # lifted steps only need a finite trial energy
-            if not lifted and not math.isfinite(E0):
-                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
-            slope = float(np.dot(rN, duN))
-            u0.data = u
-
-            def line_search(slope):
-                """Backtracking on the step length; returns True if a step was accepted.
-
-                Energy (Armijo) while the energy can resolve the predicted decrease; near
-                convergence |slope| falls below the energy's round-off and the test switches to a
-                decrease of the residual norm. Guard: finite energy (J > 0 at the energy's
-                quadrature points) and J > 0 at the history points too (Psi_plus there feeds the
-                history; NaN would poison it)."""
-                near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
-                s = 1.0
-                for _ in range(opt.max_line_search):
-                    u.data = u0 + s * du
-                    E = self._energy(u)
-                    if math.isfinite(E) and self.min_J() > 0.0:
-                        if lifted or E <= E0 + opt.armijo * s * slope:
-                            return True
-                        if near_converged:
-                            self.a_u.Apply(u, tmp)
-                            if np.linalg.norm(tmp.FV().NumPy()[self._free_np]) <= (1 - 1e-4 * s) * res:
-                                return True
-                    s *= 0.5
-                u.data = u0
-                return False
-
-            accepted = (lifted or slope < 0.0) and line_search(slope)
-            tm["line_search"] += time.perf_counter() - t_ls
-            if not accepted:
-                # the Newton direction ascends (indefinite tangent in a squeezed void), the energy
-                # does not decrease along it, or no fraction of it keeps J > 0 (near-singular
-                # tangent of broken elements after a large change of alpha): shift the tangent by
-                # mu M (Levenberg), mu raised tenfold each time
-                a_s = self._shift_form()
-                self._u_anchor.vec.data = u
-                mu = 1e-4 * self.E_max / float(np.min(self.h)) ** 2
-                for _ in range(6):
-                    shifted += 1
-                    self._mu.Set(mu)
-                    t0 = time.perf_counter()
-                    a_s.AssembleLinearization(u)
-                    assembly_time += time.perf_counter() - t0
-                    tm["assembly"] += time.perf_counter() - t0
-                    t0 = time.perf_counter()
-                    inv_s = self._factorize(a_s)
-                    tm["factorization"] += time.perf_counter() - t0
-                    tmp.data = r + a_s.mat * w  # w holds the remaining boundary values (0 if not lifted)
-                    du.data = inv_s * tmp
-                    duN = du.FV().NumPy()
-                    duN[:] = np.where(self._dir_np, rem, -duN)
-                    solve_time += time.perf_counter() - t0
-                    slope = float(np.dot(rN, duN))
-                    t_ls = time.perf_counter()
-                    ok = (lifted or slope < 0.0) and line_search(slope)
-                    tm["line_search"] += time.perf_counter() - t_ls
-                    if ok:
-                        accepted = True
-                        break
-                    mu *= 10.0
-            if not accepted:
-                return NewtonResult(False, it, res, solve_time, assembly_time, shifted,
-                                    "line search failed" if not lifted else "no admissible step towards the boundary values")
-        # one last residual check after the final update
-        self.a_u.Apply(u, r)
-        rN = r.FV().NumPy()
-        rem = np.where(self._dir_np, target - uN, 0.0)
-        res = float(np.linalg.norm(rN[self._free_np]))
-        reac = float(np.linalg.norm(rN[self._dir_np]))
-        if not np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))) and res <= rtol * max(reac, r_ref) + opt.atol:
-            self.load = load
-            self._r_valid = True
-            return NewtonResult(True, opt.max_iterations, res, solve_time, assembly_time, shifted)
-        return NewtonResult(False, opt.max_iterations, res, solve_time, assembly_time, shifted,
-                            f"no convergence in {opt.max_iterations} iterations (residual {res:.3e} N)")
 
     # ================================================================= phase field
     def _build_phase_field(self):
