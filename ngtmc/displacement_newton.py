@@ -66,6 +66,7 @@ class NewtonResult:
     message: str = ""
 
 
+#: print the residuals of each Newton iteration (a debugging switch: ngtmc.displacement_newton._DEBUG = True)
 _DEBUG = False
 
 
