@@ -40,7 +40,8 @@ if (not (_Path(__file__).resolve().parent / "studies").is_dir()
     _sys.meta_path.insert(0, _SourceTreeStudies)
 
 from .materials import Material  # noqa: E402
-from .scene import DisplacementField, DisplacementLoad, Point, Regulariser, ResolutionWarning, Scene, Support, Traction  # noqa: E402
+from .conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
+from .scene import Regulariser, ResolutionWarning, Scene  # noqa: E402
 from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate  # noqa: E402
 from .solver import NewtonOptions, Solver  # noqa: E402
 from .stepping import AdaptiveStepControl, Schedule  # noqa: E402

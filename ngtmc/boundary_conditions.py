@@ -15,7 +15,7 @@ import re
 import numpy as np
 import ngsolve as ngs
 
-from .scene import DisplacementLoad, Point, Traction
+from .conditions import DisplacementLoad, Point, Traction
 
 __all__ = ["BoundaryConditions"]
 

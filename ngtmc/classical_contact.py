@@ -40,7 +40,7 @@ import pandas as pd
 import ngsolve as ngs
 
 from .materials import Material, deformation_gradient, psi_dev, psi_vol
-from .scene import DisplacementLoad, Support
+from .conditions import DisplacementLoad, Support
 from .stepping import Schedule
 
 __all__ = ["PenaltyContact", "ContactResult", "penalty_sweep"]

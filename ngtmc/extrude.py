@@ -90,7 +90,7 @@ def plane_strain_slab(scene, thickness: float, layers: int = 1, name: str | None
     u_z held on ``front`` and ``back`` (plane strain), everything else as in ``scene``. Its
     forces and energies are those of the 2D scene for a thickness of ``thickness``."""
     import dataclasses
-    from .scene import Support
+    from .conditions import Support
     if scene.mesh.dim != 2:
         raise ValueError(f"plane_strain_slab needs a 2D scene; this one has dimension {scene.mesh.dim}")
     return dataclasses.replace(scene, mesh=extrude(scene.mesh, thickness, layers), thickness=None,

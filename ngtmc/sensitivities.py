@@ -77,7 +77,8 @@ import ngsolve as ngs
 
 from . import fracture
 from .materials import deformation_gradient
-from .scene import Scene, Traction
+from .conditions import Traction
+from .scene import Scene
 from .simulation import Simulation
 from .discretisation import rules
 from .solver import NewtonOptions, Solver

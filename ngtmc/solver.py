@@ -32,7 +32,8 @@ from .materials import deformation_gradient, gamma_interpolation, gc_interpolati
 from .boundary_conditions import BoundaryConditions
 from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
-from .scene import Point, Scene, Support, Traction, _names
+from .conditions import Point, Support, Traction
+from .scene import Scene, _names
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
 
