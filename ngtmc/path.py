@@ -35,7 +35,8 @@ applied: it bounds the dissipation per step, which the path now does itself):
    unless the step had to be scaled below a quarter of dD (slow growth).
 6. Every step starts from the secant predictor x_n + r (x_n - x_{n-1}) through the last two
    accepted states (alpha kept in [alpha_n, 1]; r the ratio of the load or dissipation
-   increments, at most 2), or, without it, from the u solve with alpha_{n-1}.
+   increments, at most 2; damped to r/2 or r/4 where the full secant would invert an element,
+   SECANT_DAMPING), or, without it, from the u solve with alpha_{n-1}.
 
 dD = Gc_ref ``crack_advance`` (times the crack front's length ``crack_front`` in 3D) times the
 step control's scale, which halves on a failed step and
@@ -97,7 +98,7 @@ CEILING_MIN = 0.5
 #: Fractions of the secant extrapolation tried, in turn, for the predictor of a step: the first
 #: that keeps J > 0 everywhere is taken; if none does, the step starts from the u solve with
 #: alpha_{n-1}. Where the void under a contact is squeezed to J of about 1e-3, the full secant
-#: inverts elements there, and the u solve then took 6-9 Newton iterations per step (the 3D
+#: inverts elements there, and the u solve then took 7-13 Newton iterations per step (the 3D
 #: hemisphere; docs/three-d.md).
 SECANT_DAMPING = (1.0, 0.5, 0.25)
 
