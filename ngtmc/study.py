@@ -43,7 +43,7 @@ SOLVER_PARAMETERS = {
                                    "'path-following' (monolithic with dissipation control where the crack grows)"),
     "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, about 3.4 s to compile per expression; "
                              "falls back to 'symbolic' without a C++ compiler), 'symbolic', 'none', or 'auto' "
-                             "('real' on meshes of 5000 elements or more)"),
+                             "('real' on meshes of 5000 elements or 10000 displacement dofs or more)"),
     "h_crack": (0.0, "mm", "adaptive refinement during the run (ngtmc.Adaptivity): target element size where the crack "
                            "is or is about to be, for example l0/4; 0: none (the mesh as the resolution gives it)"),
     "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
