@@ -47,6 +47,8 @@ from .solver import NewtonOptions, Solver  # noqa: E402
 from .stepping import AdaptiveStepControl, Schedule  # noqa: E402
 from .adapt import Adaptivity  # noqa: E402
 from .extrude import extrude  # noqa: E402
+from . import distributed  # noqa: E402
+from .distributed import distribute  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -54,7 +56,8 @@ __all__ = [
     "Material", "Scene", "Support", "DisplacementLoad", "DisplacementField", "Traction", "Point", "Regulariser",
     "ResolutionWarning",
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
-    "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "Adaptivity", "extrude", "__version__",
+    "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "Adaptivity", "extrude", "distributed", "distribute",
+    "__version__",
 ]
 
 from .study import Case, list_studies, load_study  # noqa: E402

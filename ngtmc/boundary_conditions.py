@@ -35,7 +35,8 @@ class BoundaryConditions:
             if re.fullmatch(boundary, el.mat):
                 dofs = np.array([k for k in el.dofs if k >= 0], dtype=int)
                 mask[dofs[(dofs >= rng.start) & (dofs < rng.stop)]] = True
-        return mask
+        # a distributed mesh: a rank may share a dof of the boundary without its boundary element
+        return self.ranks.union_mask(mask, self.u.vec)
 
     def _build_loads(self):
         """Per load: the dofs it prescribes (mask), its unit field (linear loads) and its traction form."""
@@ -210,12 +211,11 @@ class BoundaryConditions:
             self._lam_ext = self.load
             self.a_u.Apply(self.u.vec, self._r)
         out = {}
-        rN = self._r.FV().NumPy()
         for rec in self._loads:
             if "f" in rec:
                 out[rec["name"]] = self.load * rec["total"] * self.thickness
             else:
-                out[rec["name"]] = float(np.dot(rN, self.reaction_weight(rec["name"]))) * self.thickness
+                out[rec["name"]] = self.ranks.dot_array(self._r, self.reaction_weight(rec["name"])) * self.thickness
         return out
 
     def load_displacements(self) -> dict:

@@ -73,21 +73,27 @@ _DEBUG = False
 class DisplacementNewton:
     """Newton for the displacement at a fixed phase field (a base of :class:`ngtmc.solver.Solver`)."""
 
+    def _inverse(self, kind: str) -> str:
+        """The sparse direct solver to pass as ``inverse=``: ``kind``, or on a mesh distributed over
+        MPI ranks NGSolve's "masterinverse" (the matrix gathered and factorized on rank 0)."""
+        return "masterinverse" if self.ranks.parallel else kind
+
     def _factorize(self, a):
         if a is self.a_u:
-            if self._inv is None:
-                self._inv = a.mat.Inverse(self.free, inverse=self.newton.linear_solver)
+            if self._inv is None or self.ranks.parallel:  # NGSolve's masterinverse has no Update
+                self._inv = a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
             else:
                 self._inv.Update()
             return self._inv
-        return a.mat.Inverse(self.free, inverse=self.newton.linear_solver)
+        return a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
 
     def _energy(self, vec) -> float:
         try:
             e = self.a_u.Energy(vec)
         except Exception:  # pragma: no cover - NGSolve raises on some invalid states
-            return math.nan
-        return e
+            e = math.nan
+        # a distributed mesh: each rank's part (the form is a plain BilinearForm there), summed
+        return self.ranks.sum(e)
 
     def _shift_form(self):
         if self._a_shift is None:
@@ -126,11 +132,10 @@ class DisplacementNewton:
             t0 = time.perf_counter()
             self.a_u.Apply(u, r)
             tm["residual"] += time.perf_counter() - t0
-            rN = r.FV().NumPy()
             rem = np.where(self._dir_np, target - uN, 0.0)
-            lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
-            res = float(np.linalg.norm(rN[self._free_np]))
-            reac = float(np.linalg.norm(rN[self._dir_np]))
+            lifted = self.ranks.any(bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load)))))
+            res = self.ranks.masked_norm(r, self._free_np)
+            reac = self.ranks.masked_norm(r, self._dir_np)
             if not np.isfinite(res):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
             if _DEBUG:
@@ -163,7 +168,7 @@ class DisplacementNewton:
             E0 = math.nan if lifted else self._energy(u)  # lifted steps only need a finite trial energy
             if not lifted and not math.isfinite(E0):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
-            slope = float(np.dot(rN, duN))
+            slope = self.ranks.dot(r, du)
             u0.data = u
 
             def line_search(slope):
@@ -184,7 +189,7 @@ class DisplacementNewton:
                             return True
                         if near_converged:
                             self.a_u.Apply(u, tmp)
-                            if np.linalg.norm(tmp.FV().NumPy()[self._free_np]) <= (1 - 1e-4 * s) * res:
+                            if self.ranks.masked_norm(tmp, self._free_np) <= (1 - 1e-4 * s) * res:
                                 return True
                     s *= 0.5
                 u.data = u0
@@ -199,7 +204,7 @@ class DisplacementNewton:
                 # mu M (Levenberg), mu raised tenfold each time
                 a_s = self._shift_form()
                 self._u_anchor.vec.data = u
-                mu = 1e-4 * self.E_max / float(np.min(self.h)) ** 2
+                mu = 1e-4 * self.E_max / self.ranks.min(self.h) ** 2
                 for _ in range(6):
                     shifted += 1
                     self._mu.Set(mu)
@@ -215,7 +220,7 @@ class DisplacementNewton:
                     duN = du.FV().NumPy()
                     duN[:] = np.where(self._dir_np, rem, -duN)
                     solve_time += time.perf_counter() - t0
-                    slope = float(np.dot(rN, duN))
+                    slope = self.ranks.dot(r, du)
                     t_ls = time.perf_counter()
                     ok = (lifted or slope < 0.0) and line_search(slope)
                     tm["line_search"] += time.perf_counter() - t_ls
@@ -228,11 +233,10 @@ class DisplacementNewton:
                                     "line search failed" if not lifted else "no admissible step towards the boundary values")
         # one last residual check after the final update
         self.a_u.Apply(u, r)
-        rN = r.FV().NumPy()
         rem = np.where(self._dir_np, target - uN, 0.0)
-        res = float(np.linalg.norm(rN[self._free_np]))
-        reac = float(np.linalg.norm(rN[self._dir_np]))
-        if not np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))) and res <= rtol * max(reac, r_ref) + opt.atol:
+        res = self.ranks.masked_norm(r, self._free_np)
+        reac = self.ranks.masked_norm(r, self._dir_np)
+        if not self.ranks.any(bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))) and res <= rtol * max(reac, r_ref) + opt.atol:
             self.load = load
             self._r_valid = True
             return NewtonResult(True, opt.max_iterations, res, solve_time, assembly_time, shifted)

@@ -235,7 +235,8 @@ class Scene:
 
     @property
     def has_void(self) -> bool:
-        return bool(np.any(self.element_density() < 1.0))
+        from .distributed import Ranks
+        return Ranks(self.mesh).any(bool(np.any(self.element_density() < 1.0)))
 
     # ---------------------------------------------------------------- validation
     def check(self) -> "Scene":
@@ -248,7 +249,7 @@ class Scene:
             raise TypeError(f"Scene.mesh must be an ngsolve.Mesh, got {type(mesh).__name__}")
         if mesh.dim not in (2, 3):
             raise ValueError(f"mesh dimension {mesh.dim} is not supported (2 or 3)")
-        if mesh.ne == 0:
+        if (mesh.ne if mesh.comm.size == 1 else mesh.comm.Sum(mesh.ne)) == 0:  # rank 0 of an MPI run holds none
             raise ValueError("Scene.mesh is empty (0 elements): generate it from a geometry with faces (2D) or "
                              "solids (3D), e.g. ngsolve.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=...))")
         if mesh.dim == 3 and self.thickness is not None:
@@ -285,7 +286,7 @@ class Scene:
             for r, v in self.density.items():
                 need_region(r, "Scene.density")
         rho = self.element_density()
-        if not np.all(np.isfinite(rho)) or rho.min() < 0.0 or rho.max() > 1.0:
+        if rho.size and (not np.all(np.isfinite(rho)) or rho.min() < 0.0 or rho.max() > 1.0):
             raise ValueError(f"Scene.density: rho must lie in [0, 1]; got values in [{rho.min():g}, {rho.max():g}]")
         for r in self.fracture_region_names:
             need_region(r, "Scene.fracture_regions")

@@ -128,7 +128,7 @@ class StepSchemes:
         for passes in range(1, max_passes + 1):
             info["projected"] = s.solve_phase_field(H_trial)
             if s.alpha is not None and alpha_prev_pass is not None:
-                change = float(np.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass)))
+                change = s.ranks.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass))
                 if change <= self.staggered_tol:
                     # alpha from the latest H agrees with the one u is in equilibrium with: keep u
                     s.alpha.vec.FV().NumPy()[:] = alpha_prev_pass
@@ -141,7 +141,7 @@ class StepSchemes:
             if s.alpha is None:
                 break  # nothing may break: no history to keep
             H_trial = s.trial_history()
-            if not np.all(np.isfinite(H_trial)):
+            if not s.ranks.all(bool(np.all(np.isfinite(H_trial)))):
                 return fail("history not finite (J <= 0 at a history point)")
             if max_passes == 1:
                 break

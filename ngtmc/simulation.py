@@ -134,6 +134,8 @@ class Simulation(StepSchemes):
         if control is None:
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
         self._check_scheme(scheme, staggered_tol)
+        from .distributed import check_supported
+        check_supported(scene, scheme, adapt)
         if adapt is not None:
             from .adapt import Adaptivity, private_scene
             if not isinstance(adapt, Adaptivity):
@@ -461,6 +463,8 @@ def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepCont
     ``targets``, ``section`` (3D: a plane ``(axis, mm)`` where the snapshots sample alpha); the rest go to :class:`Simulation`. The result's ``run_dir`` is the folder.
     """
     if out_dir is not None:
+        from .distributed import check_supported
+        check_supported(scene, out_dir=out_dir)
         from .runner import run_scene
         return run_scene(scene, schedule, control, out_dir, **options)
     return Simulation(scene, schedule, control, **options).run()

@@ -31,6 +31,7 @@ from . import splits
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
 from .boundary_conditions import BoundaryConditions
 from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
+from .distributed import Ranks
 from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
 from .conditions import Point, Support, Traction
 from .scene import Scene, _names
@@ -76,6 +77,8 @@ class Solver(BoundaryConditions, DisplacementNewton):
         # a copy: the options object passed in comes back unchanged (atol is filled in below)
         self.newton = dataclasses.replace(newton) if newton is not None else NewtonOptions()
         self.mesh = mesh = scene.mesh
+        #: reductions over MPI ranks (:mod:`ngtmc.distributed`; the serial expressions on a serial mesh)
+        self.ranks = Ranks(mesh)
         self.dim = d = mesh.dim
         self.order = p = scene.displacement_order
         self._compiled = {}  # id(cf) -> (cf, compiled) of _maybe_compile
@@ -102,7 +105,8 @@ class Solver(BoundaryConditions, DisplacementNewton):
         self.mesh_generation = 0
         self._apply_orders()
         if compile == "auto":  # C++ code generation pays off on larger meshes only
-            big = mesh.ne >= AUTO_REAL_COMPILE_ELEMENTS or self.fes_u.ndof >= AUTO_REAL_COMPILE_DOFS
+            ndof_u = self.fes_u.ParallelDofs().ndofglobal if self.ranks.parallel else self.fes_u.ndof
+            big = self.ranks.sum(mesh.ne) >= AUTO_REAL_COMPILE_ELEMENTS or ndof_u >= AUTO_REAL_COMPILE_DOFS
             compile = "real" if big else True
         self._compile = compile
         self.u = ngs.GridFunction(self.fes_u, name="displacement")
@@ -138,8 +142,8 @@ class Solver(BoundaryConditions, DisplacementNewton):
         self.G = self.G0 * self.gamma
         self.Gc = self.Gc0 * gc_interpolation(self.rho, scene.gc_a, scene.gc_b)
         self.E_max = max(m.E for m in mat_of.values())
-        pts = np.asarray(mesh.ngmesh.Coordinates())
-        self.length_scale = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+        lo, hi = self._box(np.asarray(mesh.ngmesh.Coordinates()))
+        self.length_scale = float(np.linalg.norm(hi - lo))
         if self.newton.atol is None:
             self.newton.atol = 1e-12 * self.E_max * self.length_scale ** (d - 1)
 
@@ -346,8 +350,9 @@ class Solver(BoundaryConditions, DisplacementNewton):
         for name, density, regions in merged_terms(self.energy_terms(trial)):
             if name == "regularisation" and self.scene.regulariser.damping == "none":
                 # assembled once: not worth a compilation
+                density_q, measure_q = density, self.energy_measure(name, regions)
                 quadratic = bilinear_form(self.fes_u, symmetric=True)
-                quadratic += ngs.Variation(density * self.energy_measure(name, regions))
+                quadratic += ngs.Variation(density_q * measure_q)
                 # a zero term on every element gives K the sparsity pattern of the tangent
                 quadratic += ngs.Variation(ngs.Parameter(0.0) * ngs.InnerProduct(trial, trial) * ngs.dx)
                 continue
@@ -355,6 +360,9 @@ class Solver(BoundaryConditions, DisplacementNewton):
         if extra is not None:
             a += ngs.Variation(extra)
         if quadratic is None:
+            return a
+        if self.ranks.parallel:  # the constant-tangent wrapper adds local matrices: fold the term in
+            a += ngs.Variation(density_q * measure_q)
             return a
         q = _QuadraticPlus(a, quadratic, self._design_key)
         self._quadratic_forms.append(q)
@@ -381,7 +389,8 @@ class Solver(BoundaryConditions, DisplacementNewton):
         out = {"elastic_energy": 0.0, "regularisation_energy": 0.0}
         for name, density, regions in self.energy_terms(self.u):
             key = "regularisation_energy" if name == "regularisation" else "elastic_energy"
-            out[key] += float(ngs.Integrate(density * self.energy_measure(name, regions), self.mesh))
+            # NGSolve trap: Integrate of an integral (cf * dx) is the rank's part on a distributed mesh
+            out[key] += self.ranks.sum(float(ngs.Integrate(density * self.energy_measure(name, regions), self.mesh)))
         t = self.thickness
         out = {k: v * t for k, v in out.items()}
         wf = self.fracture_energy_per_thickness()
@@ -410,10 +419,10 @@ class Solver(BoundaryConditions, DisplacementNewton):
 
     def min_J(self) -> float:
         """Smallest det F at the guard quadrature points, dimensionless."""
-        return float(self.J_values().min())
+        return self.ranks.min(self.J_values())
 
     def max_alpha(self) -> float:
-        return float(self.alpha.vec.FV().NumPy().max()) if self.alpha is not None else 0.0
+        return self.ranks.max(self.alpha.vec.FV().NumPy()) if self.alpha is not None else 0.0
 
     def fracture_box(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper corners (mm) of the bounding box of the vertices of the fracture
@@ -423,7 +432,15 @@ class Solver(BoundaryConditions, DisplacementNewton):
         if self.alpha is not None:
             pts = pts[sorted({v.nr for el in mesh.Elements(ngs.VOL) if re.fullmatch(self._frac_re, el.mat)
                               for v in el.vertices})]
-        return pts.min(axis=0), pts.max(axis=0)
+        return self._box(pts)
+
+    def _box(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners (mm) of the bounding box of points (rows), over all ranks."""
+        if not self.ranks.parallel:
+            return pts.min(axis=0), pts.max(axis=0)
+        pts = pts.reshape(-1, self.dim) if pts.size else np.zeros((0, self.dim))
+        return (np.array([self.ranks.min(pts[:, i]) for i in range(self.dim)]),
+                np.array([self.ranks.max(pts[:, i]) for i in range(self.dim)]))
 
     # ================================================================= phase field
     def _build_phase_field(self):
@@ -451,13 +468,13 @@ class Solver(BoundaryConditions, DisplacementNewton):
         self.H.vec.FV().NumPy()[:] = self.H_committed if H_values is None else H_values
         self.a_alpha.Assemble()
         self.f_alpha.Assemble()
-        if self._inv_alpha is None:
-            self._inv_alpha = self.a_alpha.mat.Inverse(self.fes_a.FreeDofs(), inverse="sparsecholesky")
+        if self._inv_alpha is None or self.ranks.parallel:  # NGSolve's masterinverse has no Update
+            self._inv_alpha = self.a_alpha.mat.Inverse(self.fes_a.FreeDofs(), inverse=self._inverse("sparsecholesky"))
         else:
             self._inv_alpha.Update()
         self.alpha.vec.data = self._inv_alpha * self.f_alpha.vec
         a = self.alpha.vec.FV().NumPy()
-        projected = int(np.count_nonzero((a < self.alpha_committed) | (a > 1.0)))
+        projected = self.ranks.count((a < self.alpha_committed) | (a > 1.0), self.alpha.vec)
         a[:] = np.clip(np.maximum(a, self.alpha_committed), 0.0, 1.0)
         self.timings["phase_field"] += time.perf_counter() - t0
         return projected
