@@ -1,10 +1,11 @@
-"""The contact-and-fracture scene of ``tests/test_mpi.py``, run serially or on MPI ranks.
+"""The contact-and-fracture scene of ``tests/test_mpi.py`` and ``benchmarks/mpi.py``, run serially
+or on MPI ranks.
 
 A block (region "upper", 0.4 x 0.4 mm) is pushed down through a third-medium gap of 0.05 mm onto
 a wider block (region "lower", 1 x 0.4 mm, clamped at the bottom) that may break: the void is
 squeezed under the punch, then the lower block cracks from the punch's corners. Units: mm, N, MPa.
 
-Under MPI (``mpiexec -n 3 python -m mpi4py tests/mpi_scene.py OUT.json``; ``-m mpi4py`` aborts
+Under MPI (``mpiexec -n 3 python -m mpi4py benchmarks/mpi_scene.py OUT.json``; ``-m mpi4py`` aborts
 every rank when one raises, instead of leaving the others waiting): every rank builds the scene,
 :func:`ngtmc.distributed.distribute` spreads it, and rank 0 writes OUT.json with the history and
 the rank-local numbers that the NGSolve traps of :mod:`ngtmc.distributed` are about.
@@ -72,7 +73,7 @@ def main(out: str):
     integral = ngs.Integrate(cf * ngs.dx, s.mesh)   # NGSolve: the rank's part
     integrate_cf = ngs.Integrate(cf, s.mesh)        # NGSolve: summed over ranks
     local = comm.gather({"elements": s.mesh.ne, "form_energy": form_energy, "integral": integral,
-                         "integrate_cf": integrate_cf}, root=0)
+                         "integrate_cf": integrate_cf, "timings_s": dict(s.timings)}, root=0)
     summed_energy = s._energy(s.u.vec)             # ngtmc: summed over ranks (a collective call)
     refused = ""
     try:
