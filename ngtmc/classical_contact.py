@@ -42,6 +42,7 @@ import ngsolve as ngs
 from .materials import Material, deformation_gradient, psi_dev, psi_vol
 from .conditions import DisplacementLoad, Support
 from .stepping import Schedule
+from .displacement_newton import lifted_direction, residual_split
 
 __all__ = ["PenaltyContact", "ContactResult", "penalty_sweep"]
 
@@ -195,7 +196,6 @@ class PenaltyContact:
         iteration, energy line search with a J > 0 guard (NaN energy rejected), the Dirichlet
         increment carried by the Newton increment."""
         u = self.u.vec
-        uN = u.FV().NumPy()
         r, du, u0 = self._r, self._du, self._u0
         target = np.where(self._dir, load * self._e, 0.0)
         r_ref = 0.0
@@ -203,11 +203,7 @@ class PenaltyContact:
         for it in range(self.max_iterations + 1):
             self._update_pairs()
             self.a.Apply(u, r)
-            rN = r.FV().NumPy()
-            rem = np.where(self._dir, target - uN, 0.0)
-            lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
-            res = float(np.linalg.norm(rN[self._free]))
-            reac = float(np.linalg.norm(rN[self._dir]))
+            rem, lifted, res, reac = residual_split(r, u, target, self._free, self._dir, load)
             if not math.isfinite(res):
                 return ContactResult(False, it, res, "residual is not finite")
             if not lifted:
@@ -220,16 +216,10 @@ class PenaltyContact:
                 break
             self.a.AssembleLinearization(u)
             inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=self.inverse)
-            w = u.CreateVector()
-            w.FV().NumPy()[:] = rem
-            tmp = u.CreateVector()
-            tmp.data = r + self.a.mat * w
-            du.data = inv * tmp
-            duN = du.FV().NumPy()
-            duN[:] = np.where(self._dir, rem, -duN)
+            lifted_direction(self.a.mat, inv, r, rem, self._dir, u.CreateVector(), u.CreateVector(), du)
             u0.data = u
             E0 = self.energy()
-            slope = float(np.dot(rN, duN))
+            slope = float(np.dot(r.FV().NumPy(), du.FV().NumPy()))
             s = 1.0
             ok = False
             for _ in range(20):

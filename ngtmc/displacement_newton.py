@@ -18,7 +18,8 @@ import time
 import numpy as np
 import ngsolve as ngs
 
-__all__ = ["DisplacementNewton", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL"]
+__all__ = ["DisplacementNewton", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "residual_split",
+           "lifted_direction"]
 
 #: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
 DISPLACEMENT_RTOL = 1e-8
@@ -66,6 +67,34 @@ class NewtonResult:
     message: str = ""
 
 
+def residual_split(r, u, target: np.ndarray, free: np.ndarray, dirichlet: np.ndarray, load: float, ranks=None):
+    """Where a Newton iteration at the imposed displacement ``load`` (mm) stands, from the residual
+    ``r`` (N) at ``u`` (NGSolve vectors) and the Dirichlet values ``target`` (mm, a dof array).
+
+    Returns (rem, lifted, res, reac): the boundary values still to impose (dof array, mm, zero on
+    the free dofs), whether any remain (the boundary values are then being lifted), the norm of
+    the residual on the free dofs and on the Dirichlet dofs (N). ``ranks``: the reductions of a
+    distributed mesh (:class:`ngtmc.distributed.Ranks`; None for a serial one)."""
+    rem = np.where(dirichlet, target - u.FV().NumPy(), 0.0)
+    lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
+    if ranks is None:
+        rN = r.FV().NumPy()
+        return rem, lifted, float(np.linalg.norm(rN[free])), float(np.linalg.norm(rN[dirichlet]))
+    return rem, ranks.any(lifted), ranks.masked_norm(r, free), ranks.masked_norm(r, dirichlet)
+
+
+def lifted_direction(mat, inv, r, rem: np.ndarray, dirichlet: np.ndarray, w, tmp, du):
+    """The Newton increment ``du`` that carries the remaining boundary values: ``rem`` on the
+    Dirichlet dofs, and on the free dofs -(K^-1 (r + K w)) with w = rem, so that the boundary
+    values are never written into u directly (which would invert boundary elements). ``mat``: the
+    tangent K; ``inv``: its inverse on the free dofs; ``w``, ``tmp``: work vectors."""
+    w.FV().NumPy()[:] = rem
+    tmp.data = r + mat * w
+    du.data = inv * tmp
+    duN = du.FV().NumPy()
+    duN[:] = np.where(dirichlet, rem, -duN)
+
+
 #: print the residuals of each Newton iteration (a debugging switch: ngtmc.displacement_newton._DEBUG = True)
 _DEBUG = False
 
@@ -77,6 +106,10 @@ class DisplacementNewton:
         """The sparse direct solver to pass as ``inverse=``: ``kind``, or on a mesh distributed over
         MPI ranks NGSolve's "masterinverse" (the matrix gathered and factorized on rank 0)."""
         return "masterinverse" if self.ranks.parallel else kind
+
+    @property
+    def _ranks_or_none(self):
+        return self.ranks if self.ranks.parallel else None
 
     def _factorize(self, a):
         if a is self.a_u:
@@ -119,7 +152,6 @@ class DisplacementNewton:
         u = self.u.vec
         r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
         self._r_valid = False
-        uN = u.FV().NumPy()
         target = self.dirichlet_target(load)
         self._lam_ext = load
         solve_time = 0.0
@@ -132,10 +164,7 @@ class DisplacementNewton:
             t0 = time.perf_counter()
             self.a_u.Apply(u, r)
             tm["residual"] += time.perf_counter() - t0
-            rem = np.where(self._dir_np, target - uN, 0.0)
-            lifted = self.ranks.any(bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load)))))
-            res = self.ranks.masked_norm(r, self._free_np)
-            reac = self.ranks.masked_norm(r, self._dir_np)
+            rem, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
             if not np.isfinite(res):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
             if _DEBUG:
@@ -154,12 +183,7 @@ class DisplacementNewton:
             t0 = time.perf_counter()
             inv = self._factorize(self.a_u)
             t1 = time.perf_counter()
-            wN = w.FV().NumPy()
-            wN[:] = rem
-            tmp.data = r + self.a_u.mat * w
-            du.data = inv * tmp
-            duN = du.FV().NumPy()
-            duN[:] = np.where(self._dir_np, rem, -duN)
+            lifted_direction(self.a_u.mat, inv, r, rem, self._dir_np, w, tmp, du)
             t2 = time.perf_counter()
             solve_time += t2 - t0
             tm["factorization"] += t1 - t0
@@ -215,10 +239,7 @@ class DisplacementNewton:
                     t0 = time.perf_counter()
                     inv_s = self._factorize(a_s)
                     tm["factorization"] += time.perf_counter() - t0
-                    tmp.data = r + a_s.mat * w  # w holds the remaining boundary values (0 if not lifted)
-                    du.data = inv_s * tmp
-                    duN = du.FV().NumPy()
-                    duN[:] = np.where(self._dir_np, rem, -duN)
+                    lifted_direction(a_s.mat, inv_s, r, rem, self._dir_np, w, tmp, du)
                     solve_time += time.perf_counter() - t0
                     slope = self.ranks.dot(r, du)
                     t_ls = time.perf_counter()
@@ -233,10 +254,8 @@ class DisplacementNewton:
                                     "line search failed" if not lifted else "no admissible step towards the boundary values")
         # one last residual check after the final update
         self.a_u.Apply(u, r)
-        rem = np.where(self._dir_np, target - uN, 0.0)
-        res = self.ranks.masked_norm(r, self._free_np)
-        reac = self.ranks.masked_norm(r, self._dir_np)
-        if not self.ranks.any(bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))) and res <= rtol * max(reac, r_ref) + opt.atol:
+        _, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
+        if not lifted and res <= rtol * max(reac, r_ref) + opt.atol:
             self.load = load
             self._r_valid = True
             return NewtonResult(True, opt.max_iterations, res, solve_time, assembly_time, shifted)
