@@ -37,7 +37,8 @@ import ngsolve as ngs
 from .materials import deformation_gradient
 from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
 from .discretisation import bilinear_form, rules
-from .solver import NewtonResult, _QuadraticPlus, merged_terms
+from .energy_forms import _QuadraticPlus, merged_terms
+from .solver import NewtonResult
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
@@ -206,9 +207,9 @@ class CoupledNewton:
         The terms with a constant tangent, the phase-field operator (Gc/l0 alpha beta + Gc l0
         grad alpha . grad beta) and the Hessian regulariser (quadratic in u), are assembled once
         into a constant matrix K that is added to each tangent and whose K x is added to each
-        residual (:class:`~ngtmc.solver._QuadraticPlus`, again only when the density or a material
+        residual (:class:`~ngtmc.energy_forms._QuadraticPlus`, again only when the density or a material
         parameter changes). Elastic terms of one region set are one integrand
-        (:func:`~ngtmc.solver.merged_terms`), and the replacement of Psi_d by H_n is one term where
+        (:func:`~ngtmc.energy_forms.merged_terms`), and the replacement of Psi_d by H_n is one term where
         both live at the same points. Three-point bending quick, one thread: tangent assembly
         100 -> 45 ms, residual 22 -> 10 ms (docs/performance.md)."""
         s = self.s

@@ -8,9 +8,10 @@ One load step of the paper's scheme (Sect. "Numerical implementation") is, with 
    indefinite, and the Dirichlet increment carried by the Newton increment);
 3. :meth:`Solver.update_history`: H_n = max(H_{n-1}, Psi_plus(u_n)) at the quadrature points.
 
-:mod:`ngtmc.simulation` drives these through a load schedule. Two parts of :class:`Solver` live in
-modules of their own, as its bases: the displacement Newton (:mod:`ngtmc.displacement_newton`) and
-the boundary conditions and reactions (:mod:`ngtmc.boundary_conditions`).
+:mod:`ngtmc.simulation` drives these through a load schedule. Three parts of :class:`Solver` live in
+modules of their own, as its bases: the displacement Newton (:mod:`ngtmc.displacement_newton`),
+the boundary conditions and reactions (:mod:`ngtmc.boundary_conditions`), and the phase field and
+history (:mod:`ngtmc.phase_field`); the form wrappers are :mod:`ngtmc.energy_forms`.
 
 Units: mm, N, MPa. Forces and energies returned by this module are for the scene thickness in 2D.
 """
@@ -19,7 +20,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import re
-import time
 
 import numpy as np
 import ngsolve as ngs
@@ -28,8 +28,10 @@ from ngsolve.comp import IntegrationRuleSpace
 from . import contact_regularisation as creg
 from . import fracture
 from . import splits
-from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_plus, psi_vol
+from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_vol
 from .boundary_conditions import BoundaryConditions
+from .energy_forms import _ExternalWork, _QuadraticPlus, merged_terms
+from .phase_field import PhaseFieldHistory
 from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .distributed import Ranks
 from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
@@ -55,7 +57,7 @@ def _regex(names):
     return "|".join(names)
 
 
-class Solver(BoundaryConditions, DisplacementNewton):
+class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
     """Fields and solvers of a :class:`~ngtmc.scene.Scene`.
 
     Attributes worth knowing: ``u`` (displacement GridFunction, mm), ``alpha`` (phase field
@@ -398,13 +400,6 @@ class Solver(BoundaryConditions, DisplacementNewton):
         out["dissipated_energy"] = wf * t / fracture.C_W
         return out
 
-    def fracture_energy_per_thickness(self) -> float:
-        """W_f of Eq. 19, N mm per mm of thickness in 2D (N mm in 3D): int Gc (alpha^2/l0 + l0 |grad alpha|^2)."""
-        if self.alpha is None:
-            return 0.0
-        dens = fracture.fracture_energy_density(self.alpha, self.Gc, self.l0)
-        return float(ngs.Integrate(dens, self.mesh, definedon=self.mesh.Materials(self._frac_re), order=2))
-
     def J_values(self) -> np.ndarray:
         """det F at the guard quadrature points (dimensionless), element by element; a view of a
         scratch vector that the next call overwrites."""
@@ -420,9 +415,6 @@ class Solver(BoundaryConditions, DisplacementNewton):
     def min_J(self) -> float:
         """Smallest det F at the guard quadrature points, dimensionless."""
         return self.ranks.min(self.J_values())
-
-    def max_alpha(self) -> float:
-        return self.ranks.max(self.alpha.vec.FV().NumPy()) if self.alpha is not None else 0.0
 
     def fracture_box(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper corners (mm) of the bounding box of the vertices of the fracture
@@ -441,81 +433,6 @@ class Solver(BoundaryConditions, DisplacementNewton):
         pts = pts.reshape(-1, self.dim) if pts.size else np.zeros((0, self.dim))
         return (np.array([self.ranks.min(pts[:, i]) for i in range(self.dim)]),
                 np.array([self.ranks.max(pts[:, i]) for i in range(self.dim)]))
-
-    # ================================================================= phase field
-    def _build_phase_field(self):
-        a_t, b_t = self.fes_a.TnT()
-        dxf = ngs.dx(definedon=self.mesh.Materials(self._frac_re))
-        dxHf = ngs.dx(definedon=self.mesh.Materials(self._frac_re), intrules=self.irs.GetIntegrationRules())
-        self.a_alpha = bilinear_form(self.fes_a, symmetric=True)
-        self.f_alpha = ngs.LinearForm(self.fes_a)
-        bil, lin = fracture.alpha_driving_form(a_t, b_t, self.H, self.Gc, self.l0, dxHf, dxf)
-        self.a_alpha += bil
-        self.f_alpha += lin
-        self._inv_alpha = None
-
-    def solve_phase_field(self, H_values: np.ndarray | None = None) -> int:
-        """Solve the linear phase-field equation for alpha with the history fixed (step 1).
-
-        H_values: history at the quadrature points (MPa), default the committed H_{n-1}. The
-        solution is projected onto [alpha_{n-1}, 1] (irreversibility; and the consistent P1
-        reaction term is not an M-matrix, so unprojected alpha may overshoot 1). Returns the number
-        of projected dofs. Returns 0 when the scene has no phase field."""
-        if self.alpha is None:
-            return 0
-        t0 = time.perf_counter()
-        self._r_valid = False
-        self.H.vec.FV().NumPy()[:] = self.H_committed if H_values is None else H_values
-        self.a_alpha.Assemble()
-        self.f_alpha.Assemble()
-        if self._inv_alpha is None or self.ranks.parallel:  # NGSolve's masterinverse has no Update
-            self._inv_alpha = self.a_alpha.mat.Inverse(self.fes_a.FreeDofs(), inverse=self._inverse("sparsecholesky"))
-        else:
-            self._inv_alpha.Update()
-        self.alpha.vec.data = self._inv_alpha * self.f_alpha.vec
-        a = self.alpha.vec.FV().NumPy()
-        projected = self.ranks.count((a < self.alpha_committed) | (a > 1.0), self.alpha.vec)
-        a[:] = np.clip(np.maximum(a, self.alpha_committed), 0.0, 1.0)
-        self.timings["phase_field"] += time.perf_counter() - t0
-        return projected
-
-    def crack_driving_density(self, F) -> ngs.CoefficientFunction:
-        """Psi_plus of the scene's split (:mod:`ngtmc.splits`; default the paper's Eq. 6), MPa:
-        what the history H_n = max(H_{n-1}, Psi_plus(u_n)) of Eq. 7 takes in, for every
-        formulation. F: deformation gradient (CF of a GridFunction or a trial function)."""
-        sc = self.scene
-        if sc.split == splits.DEFAULT_SPLIT:
-            return psi_plus(F, self.K, self.G)
-        return splits.split_energy(sc.split, F, self.K, self.G)[0]
-
-    def degraded_density(self, F) -> ngs.CoefficientFunction:
-        """The energy density that g(alpha) multiplies in the fracture regions, MPa: Psi_bar of
-        Eq. 2 in the hybrid formulation, the split's Psi_plus in the anisotropic one."""
-        if self.scene.formulation == "anisotropic":
-            return splits.split_energy(self.scene.split, F, self.K, self.G)[0]
-        return psi_vol(F, self.K) + psi_dev(F, self.G)
-
-    def psi_plus_values(self) -> np.ndarray:
-        """Psi_plus(u) of the scene's split (Eq. 6 by default) at the history quadrature points,
-        MPa (a copy)."""
-        F = deformation_gradient(self.u)
-        self._scratch_irs.Interpolate(self.crack_driving_density(F))
-        return self._scratch_irs.vec.FV().NumPy().copy()
-
-    def trial_history(self) -> np.ndarray:
-        """max(H_{n-1}, Psi_plus(u)) at the quadrature points (Eq. 7), MPa; not committed."""
-        t0 = time.perf_counter()
-        H = np.maximum(self.H_committed, self.psi_plus_values())
-        self.timings["history"] += time.perf_counter() - t0
-        return H
-
-    def update_history(self, H_trial: np.ndarray | None = None):
-        """Commit H_n = max(H_{n-1}, Psi_plus(u_n)) and alpha_n (step 3). ``H_trial``: the
-        already computed :meth:`trial_history` of the current u, to avoid computing it twice."""
-        self.H_committed = self.trial_history() if H_trial is None else H_trial
-        self.H.vec.FV().NumPy()[:] = self.H_committed
-        if self.alpha is not None:
-            self.alpha_committed = self.alpha.vec.FV().NumPy().copy()
 
     # ================================================================= state
     def get_state(self) -> dict:
@@ -541,101 +458,3 @@ class Solver(BoundaryConditions, DisplacementNewton):
     def ndof(self) -> dict:
         return {"u": self.fes_u.ndof, "alpha": self.fes_a.ndof if self.fes_a is not None else 0,
                 "history_points": self.irs.ndof}
-
-
-
-def merged_terms(terms: list) -> list:
-    """The (name, density, regions) terms of :meth:`Solver.energy_terms` with the elastic terms of
-    one region set summed into one density, named after the first: their measure is the same
-    (:meth:`Solver.energy_measure` depends on the regions only), and one integrand evaluates the
-    shared F, J and invariants once. Three-point bending quick, coupled tangent: 40 -> 28 ms for
-    the two terms of the fracture regions (one thread)."""
-    out, sums = [], {}
-    for name, density, regions in terms:
-        if out and "regularisation" not in (name, out[-1][0]) and out[-1][2] == regions:
-            key = (id(out[-1][1]), id(density))  # the same pair of objects gives the same sum object
-            if key not in sums:
-                sums[key] = (out[-1][1], density, out[-1][1] + density)
-            out[-1] = (out[-1][0], sums[key][2], regions)
-        else:
-            out.append((name, density, regions))
-    return out
-
-
-class _ExternalWork:
-    """The energy form minus the work of the tractions, lambda <f, u>, with the form's interface
-    (Apply, Energy, AssembleLinearization, mat). lambda is ``solver._lam_ext``: the load of the
-    Newton solve under way, or the current load for a reaction. The tangent is the form's (dead
-    loads)."""
-
-    def __init__(self, form, solver):
-        self.form, self.solver = form, solver
-
-    @property
-    def f(self):
-        """The traction vector per unit lambda (the solver's, rebuilt when the mesh changes)."""
-        return self.solver._f_ext
-
-    def Apply(self, x, y):
-        self.form.Apply(x, y)
-        y.data -= self.solver._lam_ext * self.f
-
-    def Energy(self, x) -> float:
-        return self.form.Energy(x) - self.solver._lam_ext * ngs.InnerProduct(self.f, x)
-
-    def AssembleLinearization(self, x):
-        self.form.AssembleLinearization(x)
-
-    @property
-    def mat(self):
-        return self.form.mat
-
-
-class _QuadraticPlus:
-    """A nonlinear energy form plus a constant quadratic one, 1/2 u.K u, with the interface of an
-    NGSolve BilinearForm that the solvers use (Apply, Energy, AssembleLinearization, mat).
-
-    The regulariser of Eq. 3 is quadratic in u, so its tangent K is assembled once (and again
-    only when ``key()`` changes: the density or a material parameter): at 35k dofs that saves
-    about a fifth of each tangent assembly. K has the sparsity pattern of the form's matrix (a
-    zero term on every element sees to that); this is checked."""
-
-    def __init__(self, form, quadratic, key):
-        self.form, self.quadratic, self.key = form, quadratic, key
-        self.mesh_changed()
-
-    def mesh_changed(self):
-        """New vectors for the space's new size; K is assembled again at its next use."""
-        self._key = None
-        self._zero = ngs.GridFunction(self.quadratic.space).vec
-        self._t = self._zero.CreateVector()
-
-    @property
-    def K(self):
-        """The constant tangent, assembled again when the density or a parameter changed."""
-        k = self.key()
-        if k != self._key:
-            self.quadratic.AssembleLinearization(self._zero)
-            self._key = k
-        return self.quadratic.mat
-
-    def Apply(self, x, y):
-        K = self.K
-        self.form.Apply(x, y)
-        y.data += K * x
-
-    def Energy(self, x) -> float:
-        K = self.K
-        self._t.data = K * x
-        return self.form.Energy(x) + 0.5 * ngs.InnerProduct(x, self._t)
-
-    def AssembleLinearization(self, x):
-        K = self.K
-        self.form.AssembleLinearization(x)
-        if self.form.mat.nze != K.nze:
-            raise RuntimeError("the constant regulariser matrix has another sparsity pattern than the tangent")
-        self.form.mat.AsVector().data += K.AsVector()
-
-    @property
-    def mat(self):
-        return self.form.mat
