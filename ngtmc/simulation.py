@@ -166,7 +166,8 @@ class Simulation(StepSchemes):
         from .plugins import Progress, force_unit
         #: force unit of this scene's history (:func:`ngtmc.plugins.force_unit`)
         self.force_unit = force_unit(scene.dim, scene.thickness)
-        self._progress = Progress(progress, "[ngtmc]", self.force_unit)
+        # a scene distributed over MPI ranks: every rank holds the same history; rank 0 reports it
+        self._progress = Progress(progress if scene.mesh.comm.rank == 0 else False, "[ngtmc]", self.force_unit)
         self._record(step_size=0.0, newton_iterations=0, staggered_iterations=0, cutbacks=0,
                      solve_time=0.0, assembly_time=0.0, projected=0)
 
