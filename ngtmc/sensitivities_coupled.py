@@ -181,12 +181,7 @@ def replay_coupled(path: CoupledPath, rho=None, parameters=None) -> CoupledPath:
     if it fails at a step."""
     s, c = path.solver, path.coupled
     t0 = time.perf_counter()
-    new_rho = path.rho.copy() if rho is None else np.asarray(rho, dtype=float).copy()
-    if new_rho.shape != path.rho.shape:
-        raise ValueError(f"rho has shape {new_rho.shape}; the mesh has {path.rho.size} elements")
-    pars = dict(path.parameters)
-    for name, v in (parameters or {}).items():
-        pars[_S._resolve(s, name)] = float(v)
+    new_rho, pars = _S.replay_inputs(path, rho, parameters)
     base = [path.state(n) for n in range(path.n_steps + 1)]  # before the solver's fields change
     base_loads = path.loads.copy()
     s.rho.vec.FV().NumPy()[:] = new_rho

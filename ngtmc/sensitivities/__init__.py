@@ -70,7 +70,7 @@ from __future__ import annotations
 from .path import (  # noqa: F401 (the names of the former single module)
     _MATERIAL_KEYS, CHANGED_MESH, refuse_changed_mesh, Path, _all_parameters, _snapshot_parameters,
     _set_parameters, _default_region, _resolve, parameter_value, design_mask, _reset, _capture, _step,
-    _thin, record_path, replay,
+    _thin, record_path, replay, replay_inputs,
 )
 from .objectives import (  # noqa: F401 (the names of the former single module)
     Seeds, Objective, _Combination, _step_index, ReactionAtStep, ComplianceAtStep, ExternalWork,

@@ -273,6 +273,19 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
                 checkpoint_every=checkpoint_every)
 
 
+def replay_inputs(path, rho=None, parameters: dict | None = None):
+    """The density (one entry per element, a copy) and the full parameter dict of a replay of
+    ``path`` with ``rho`` and ``parameters`` changed (names resolved as in :func:`parameter_value`).
+    Raises ValueError for a density of the wrong length."""
+    new_rho = path.rho.copy() if rho is None else np.asarray(rho, dtype=float).copy()
+    if new_rho.shape != path.rho.shape:
+        raise ValueError(f"rho has shape {new_rho.shape}; the mesh has {path.rho.size} elements")
+    pars = dict(path.parameters)
+    for name, v in (parameters or {}).items():
+        pars[_resolve(path.solver, name)] = float(v)
+    return new_rho, pars
+
+
 def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = None) -> Path:
     """Re-run the SAME load sequence as ``path`` (no adaptivity, no cut-backs) with another design
     ``rho`` (per element) and/or other ``parameters`` ({name: value}, names as in ``wrt`` of
@@ -288,12 +301,7 @@ def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = 
         return replay_coupled(path, rho, parameters)
     s = path.solver
     t0 = time.perf_counter()
-    new_rho = path.rho.copy() if rho is None else np.asarray(rho, dtype=float).copy()
-    if new_rho.shape != path.rho.shape:
-        raise ValueError(f"rho has shape {new_rho.shape}; the mesh has {path.rho.size} elements")
-    pars = dict(path.parameters)
-    for name, v in (parameters or {}).items():
-        pars[_resolve(s, name)] = float(v)
+    new_rho, pars = replay_inputs(path, rho, parameters)
     s.rho.vec.FV().NumPy()[:] = new_rho
     _set_parameters(s, pars)
     _reset(s)
