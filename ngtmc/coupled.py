@@ -285,7 +285,7 @@ class CoupledNewton:
 
     # ------------------------------------------------------------------ solve
     def solve(self, load: float, alpha_upper: np.ndarray | None = None, dissipation: float | None = None,
-              load_bounds: tuple[float, float] | None = None) -> NewtonResult:
+              load_bounds: tuple[float, float] | None = None, max_load_step: float | None = None) -> NewtonResult:
         """Solve step ``load`` (imposed displacement, mm) from the current (u, alpha).
 
         ``alpha_upper``: upper bounds of alpha per dof (default 1). A bound below 1 caps the damage
@@ -303,7 +303,11 @@ class CoupledNewton:
         x = a + dlambda b, with b the response to a unit load change, and dlambda from the
         linearised constraint. The converged load is :attr:`load_solved` (mm); it may be below
         the load of the last step (a snap-back). ``load_bounds`` (mm): the load must stay in this
-        interval (else the solve fails)."""
+        interval (else the solve fails). ``max_load_step`` (mm): a Newton step that would move the
+        load by more than this is not taken; the solve fails with :attr:`load_unresponsive` set
+        (the damage hardly responds to the load here, so the bordered step's load change, the
+        constraint residual divided by dD/d(load), is meaningless: 5e11 mm was seen in the quick
+        L-panel's crack run, where every such step inverted an element at any line-search length)."""
         s = self.s
         tm = s.timings
         nu = self.nu
@@ -316,6 +320,7 @@ class CoupledNewton:
         a_up = np.ones_like(a_low) if alpha_upper is None else np.maximum(np.minimum(alpha_upper, 1.0), a_low)
         self.cap_binding = False
         self.load_out_of_bounds = None
+        self.load_unresponsive = False
         c = self._ncp_scale
         dir_u = s._dir_np
         path = dissipation is not None
@@ -421,8 +426,12 @@ class CoupledNewton:
                 grad = self._wf_matvec(a_cur)
                 slope = float(grad @ bN[nu:])
                 if not abs(slope) > 0.0:
+                    self.load_unresponsive = True
                     return None
                 dlam = -(g + float(grad @ dxN[nu:])) / slope
+                if max_load_step is not None and not abs(dlam) <= max_load_step:
+                    self.load_unresponsive = True
+                    return None
                 dxN += dlam * bN
             return dxN, dlam
 

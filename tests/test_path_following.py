@@ -257,3 +257,48 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
     monkeypatch.setattr(s, "min_J", lambda: -1.0)
     assert path._secant(1.0, load) is None
     np.testing.assert_array_equal(s.u.vec.FV().NumPy(), before)
+
+
+def test_a_dissipation_step_that_would_move_the_load_too_far_is_refused():
+    """max_load_step: a bordered Newton step whose load change exceeds it is not taken (the
+    damage hardly responds to the load; the quick L-panel's arrested crack asked for 5e11 mm and
+    inverted elements at every line-search length). The solve fails with load_unresponsive set
+    and leaves the start state; with a bound the step respects, it converges as without one."""
+    sim = _loaded(0.005)
+    s, c = sim.solver, sim.coupled
+    start = s.get_state()
+    assert s.solve_displacement(0.0051).converged
+    moved = s.get_state()
+    res = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012), max_load_step=1e-9)
+    assert not res.converged and c.load_unresponsive
+    assert "does not respond to the load" in res.message
+    np.testing.assert_array_equal(s.u.vec.FV().NumPy(), moved["u"])
+    s.set_state(moved)
+    free = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012))
+    assert free.converged and not c.load_unresponsive
+    lam = c.load_solved
+    s.set_state(start)
+    assert s.solve_displacement(0.0051).converged
+    capped = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012), max_load_step=1.0)
+    assert capped.converged and not c.load_unresponsive
+    assert c.load_solved == pytest.approx(lam, rel=1e-12)
+
+
+def test_path_following_takes_a_displacement_step_where_the_damage_does_not_respond(monkeypatch):
+    """Where a dissipation step's Newton iteration would move the load by more than
+    LOAD_STEP_LIMIT du_max, the step becomes a displacement step of the proposed increment (rule
+    3 of ngtmc.path): with the limit at 1e-9 du_max no dissipation step is ever accepted, and the
+    run goes on by displacement steps (to 0.0055 mm, before the snap-back, which fixed-load steps
+    cannot pass)."""
+    import ngtmc.path as path_module
+    ref = ngtmc.Simulation(_plate(), 0.0055, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    ref.run()
+    assert ref._path.dissipation_steps > 0
+    monkeypatch.setattr(path_module, "LOAD_STEP_LIMIT", 1e-9)
+    sim = ngtmc.Simulation(_plate(), 0.0055, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    h = sim.run().history
+    assert sim._path.dissipation_steps == 0
+    assert h["load"].iloc[-1] == pytest.approx(0.0055)
+    assert np.all(np.diff(h["load"].to_numpy()) > 0)
