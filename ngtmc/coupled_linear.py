@@ -61,14 +61,21 @@ class CoupledLinearSolver:
         return vals, self._diag[0], self._diag[1]
 
     def shifted(self, free: np.ndarray, mu: float):
-        """UMFPACK factorization of the tangent with its diagonal on the ``free`` dofs scaled by
-        (1 + mu) (Levenberg); the assembled matrix is restored. Returns solve(rhs, out)."""
+        """Factorization of the tangent with its diagonal on the ``free`` dofs increased by mu
+        times its magnitude (Levenberg); the assembled matrix is restored. Block-GMRES keeps its
+        preconditioner's symbolic factorization and applies the shift in its operator; the direct
+        solvers factorize the shifted matrix. Returns solve(rhs, out)."""
         A = self.form.mat
         vals, pos, row = self._diagonal()
         keep = vals[pos].copy()
-        vals[pos] = keep + np.where(free[row], mu * np.abs(keep), 0.0)
+        shift = np.where(free[row], mu * np.abs(keep), 0.0)
+        vals[pos] = keep + shift
         try:
-            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
+            if self.linear_solver == "block-gmres":
+                d = np.zeros(A.height)
+                d[row] = shift
+                return self._block_solver(free, diagonal_shift=d)
+            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
         finally:
             vals[pos] = keep
         return _applying(inv)
@@ -90,13 +97,17 @@ class CoupledLinearSolver:
             return self._block_solver(free)
         return _applying(self.form.mat.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver))
 
-    def _block_solver(self, free: np.ndarray):
+    def _block_solver(self, free: np.ndarray, diagonal_shift: np.ndarray | None = None):
         """GMRES with the block lower-triangular preconditioner [K_uu 0; K_au K_aa], with sparse
         Cholesky factors of the symmetric u-u and alpha-alpha blocks (the u-u factor reuses its
         symbolic step). GMRES stops when the preconditioned residual fell by ``gmres_rtol``
         (relative: ngsolve's ``GMRes(tol=)`` is an absolute tolerance, which left the Newton
         corrections of a nearly converged step inexact, see tests/test_traps.py). Falls back to
-        UMFPACK when GMRES does not converge in ``gmres_maxsteps``."""
+        UMFPACK when GMRES does not converge in ``gmres_maxsteps``.
+
+        ``diagonal_shift`` (per dof, Levenberg): the matrix's values hold the shifted diagonal
+        while the factors are made (:meth:`shifted`); the solves apply the restored matrix plus
+        this diagonal."""
         from ngsolve.krylovspace import GMResSolver
         A = self.form.mat
         nu = self.nu
@@ -109,9 +120,23 @@ class CoupledLinearSolver:
         fa = free.copy()
         fa[:nu] = False
         inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
-        op = _Masked(A, free)
+        op = _Masked(A, free, diagonal_shift)
         pre = _BlockLower(A, self._inv_u, inv_a)
         direct = []
+        if diagonal_shift is not None:
+            vals, pos, row = self._diagonal()
+            dpos = diagonal_shift[row]
+
+        def direct_inverse():
+            """UMFPACK of the matrix (with the diagonal shift)."""
+            if diagonal_shift is None:
+                return A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
+            keep = vals[pos].copy()
+            vals[pos] = keep + dpos
+            try:
+                return A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
+            finally:
+                vals[pos] = keep
 
         def solve(rhs, out):
             rhsN = rhs.FV().NumPy()
@@ -124,7 +149,7 @@ class CoupledLinearSolver:
             sol = gm.Solve(rhs=rhs)
             self.gmres_iterations.append(gm.iterations)
             if gm.iterations >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy())):
-                direct.append(A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack"))
+                direct.append(direct_inverse())
                 sol.data = direct[0] * rhs
             out.data = sol
         return solve
@@ -158,18 +183,23 @@ class _SquareOperator(ngs.BaseMatrix):
 
 
 class _Masked(_SquareOperator):
-    """The matrix restricted to the free dofs, identity on the others."""
+    """The matrix (plus a diagonal ``shift`` per dof, if given) restricted to the free dofs,
+    identity on the others."""
 
-    def __init__(self, A, free):
+    def __init__(self, A, free, shift: np.ndarray | None = None):
         super().__init__(A)
         self.free = free
+        self.shift = shift
         self.t = A.CreateColVector()
 
     def Mult(self, x, y):
         xN = x.FV().NumPy()
-        self.t.FV().NumPy()[:] = np.where(self.free, xN, 0.0)
+        tN = self.t.FV().NumPy()
+        tN[:] = np.where(self.free, xN, 0.0)
         y.data = self.A * self.t
         yN = y.FV().NumPy()
+        if self.shift is not None:
+            yN += self.shift * tN
         yN[:] = np.where(self.free, yN, xN)
 
 

@@ -168,3 +168,39 @@ def test_coupled_newton_refuses_a_scene_without_phase_field_and_bad_solver():
         CoupledNewton(ngtmc.Solver(tension_bar(fracture=False)))
     with pytest.raises(ValueError, match="sparsecholesky"):
         CoupledNewton(ngtmc.Solver(tension_bar()), linear_solver="sparsecholesky")
+
+
+@pytest.mark.parametrize("mu", [1e-4, 1.0])
+def test_levenberg_solve_of_block_gmres_is_that_of_the_shifted_matrix(mu):
+    """CoupledLinearSolver.shifted: the block-GMRES Levenberg solve (preconditioner factorized with
+    the shifted diagonal, operator = restored matrix + shift) gives the UMFPACK solution of the
+    matrix whose free diagonal is scaled by (1 + mu), to the GMRES tolerance; the assembled
+    matrix is left unchanged, and a normal factorization after it solves the unshifted matrix."""
+    from ngtmc.coupled_linear import CoupledLinearSolver
+    s, c = _damaged_state(seed=3)
+    c.form.AssembleLinearization(c.x.vec)
+    A = c.form.mat
+    before = A.AsVector().FV().NumPy().copy()
+    free = c._free_base.copy()
+    free[:c.nu] &= ~s._dir_np
+    free[c.nu::7] = False  # some alpha dofs held at a bound
+    gm = CoupledLinearSolver(c.form, c.nu, "block-gmres", gmres_rtol=1e-12)
+    um = CoupledLinearSolver(c.form, c.nu, "umfpack")
+    rhs = c.x.vec.CreateVector()
+    rhs.FV().NumPy()[:] = np.random.default_rng(5).standard_normal(rhs.size)
+    rhs.FV().NumPy()[~free] = 0.0
+    x_gm, x_um = rhs.CreateVector(), rhs.CreateVector()
+    gm.shifted(free, mu)(rhs, x_gm)
+    np.testing.assert_array_equal(A.AsVector().FV().NumPy(), before)
+    um.shifted(free, mu)(rhs, x_um)
+    np.testing.assert_array_equal(A.AsVector().FV().NumPy(), before)
+    a, b = x_gm.FV().NumPy()[free], x_um.FV().NumPy()[free]
+    assert np.linalg.norm(a - b) <= 1e-8 * np.linalg.norm(b)
+    # the shifted solution is not the unshifted one (the shift acts), and a normal factorization
+    # after a shifted one solves the unshifted matrix (the kept u-u factor is updated again)
+    x_plain, x_plain_um = rhs.CreateVector(), rhs.CreateVector()
+    gm.factorize(free)(rhs, x_plain)
+    um.factorize(free)(rhs, x_plain_um)
+    p, q = x_plain.FV().NumPy()[free], x_plain_um.FV().NumPy()[free]
+    assert np.linalg.norm(p - q) <= 1e-8 * np.linalg.norm(q)
+    assert np.linalg.norm(a - p) > 1e-6 * np.linalg.norm(p)
