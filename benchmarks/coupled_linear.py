@@ -1,5 +1,6 @@
 """The linear solves of one coupled (u, alpha) Newton iteration of a named study's scene, side by
-side for the coupled linear solvers (``ngtmc.coupled_linear.LINEAR_SOLVERS``): factorization of
+side for the coupled linear solvers (``ngtmc.coupled_linear.LINEAR_SOLVERS``, and a preconditioner
+tried and not kept, ``symmetric-part``): factorization of
 the assembled tangent, and the two solves of the bordered system of path following (the Newton
 correction and the response to a unit load change). Best of 3, ms; GMRES iterations per solve.
 
@@ -83,6 +84,56 @@ def measure(sim, solver_name: str, threads: int) -> dict:
     return out
 
 
+def measure_symmetric_part(sim) -> dict:
+    """The same for a preconditioner tried and not kept: one sparse Cholesky factorization of the
+    symmetric part (A + A^T) / 2 of the whole coupled tangent, in GMRES on the tangent."""
+    from ngsolve.krylovspace import GMResSolver
+    from ngtmc.coupled_linear import _Masked, _SquareOperator
+    c, s = sim.coupled, sim.solver
+    c._gather()
+    c.form.AssembleLinearization(c.x.vec)
+    A = c.form.mat
+    free = c._free_base.copy()
+    free[:c.nu] &= ~s._dir_np
+    vals, cols, rowptr = A.CSR()
+    vals = np.asarray(vals)
+    cols = np.asarray(cols).astype(np.int64)
+    rowptr = np.asarray(rowptr).astype(np.int64)
+    rows = np.repeat(np.arange(rowptr.size - 1), np.diff(rowptr))
+    n = A.height
+    key, tkey = rows * n + cols, cols * n + rows
+    order = np.argsort(key)
+    transposed = order[np.searchsorted(key[order], tkey)]
+    M = A.CreateMatrix()
+    M.AsVector().FV().NumPy()[:] = 0.5 * (vals + vals[transposed])
+    inv = M.Inverse(ngs.BitArray(free.tolist()), inverse="sparsecholesky")
+    out = {"factorization": best(inv.Update)[0]}
+
+    class Pre(_SquareOperator):
+        def Mult(self, x, y):
+            y.data = inv * x
+            y.FV().NumPy()[~free] = x.FV().NumPy()[~free]
+
+    op, pre = _Masked(A, free), Pre(A)
+    rhs = c.x.vec.CreateVector()
+    rhs.FV().NumPy()[:] = np.random.default_rng(1).standard_normal(rhs.size)
+    rhs.FV().NumPy()[~free] = 0.0
+    its = []
+
+    def solve():
+        gm = GMResSolver(mat=op, pre=pre, tol=1e-8, atol=1e-300, maxiter=100, printrates=False)
+        sol = gm.Solve(rhs=rhs)
+        its.append(gm.iterations)
+        return sol
+    out["one solve"], sol = best(solve)
+    out["GMRES its"] = float(np.mean(its))
+    resid = rhs.CreateVector()
+    resid.data = A * sol
+    rN, bN = resid.FV().NumPy(), rhs.FV().NumPy()
+    out["rel. residual"] = float(np.linalg.norm((rN - bN)[free]) / np.linalg.norm(bN[free]))
+    return out
+
+
 class _nothing:
     def __enter__(self):
         return self
@@ -98,7 +149,9 @@ def main(argv=None):
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--load", type=float, required=True, help="imposed displacement of the state, mm")
     ap.add_argument("--crack", required=True, help="x0,y0,x1,y1 of the straight crack, mm")
-    ap.add_argument("--solvers", nargs="+", default=list(LINEAR_SOLVERS))
+    ap.add_argument("--solvers", nargs="+", default=list(LINEAR_SOLVERS) + ["symmetric-part"],
+                    help="linear solvers of the coupled tangent, and 'symmetric-part' (a preconditioner "
+                         "tried and not kept, measure_symmetric_part)")
     ap.add_argument("--threads", type=int, default=1)
     a = ap.parse_args(argv)
     mod = load_study(a.study)
@@ -114,7 +167,7 @@ def main(argv=None):
           f"{'rel. residual':>14s}")
     for name in a.solvers:
         try:
-            m = measure(sim, name, a.threads)
+            m = measure_symmetric_part(sim) if name == "symmetric-part" else measure(sim, name, a.threads)
         except Exception as e:  # a solver that NGSolve does not have here (pardiso without MKL)
             print(f"{name:14s} not available: {type(e).__name__}: {e}")
             continue
