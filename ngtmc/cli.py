@@ -60,6 +60,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(needs pip install ngtmc[parallel]; docs/parallel.md)")
     r.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="send the cases to the Dask scheduler at ADDRESS (e.g. tcp://host:8786) instead")
+    r.add_argument("--mpi", action="store_true",
+                   help="each case on one mesh distributed over the MPI ranks: mpiexec -n 3 python -m mpi4py "
+                        "-m ngtmc run NAME --mpi (needs pip install ngtmc[mpi]; rank 0 writes the run folder, "
+                        "without field snapshots or checkpoints; docs/parallel.md)")
     r.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
 
     sub.add_parser("list", help="list the studies with their resolutions")
@@ -147,22 +151,30 @@ def _cmd_run(args) -> int:
     except ValueError as e:
         print(f"ngtmc: error: {e}", file=sys.stderr)
         return 2
+    rank = 0
+    if args.mpi:
+        try:
+            from mpi4py import MPI
+            rank = MPI.COMM_WORLD.rank
+        except ImportError:
+            pass  # run_study says what is missing
+    say = (lambda *a, **k: print(*a, **k)) if rank == 0 else (lambda *a, **k: None)
     try:
         out = run_study(args.name, resolution=args.resolution, output=args.output, overrides=overrides,
                         report=False if args.no_report else None, resume=args.resume,
                         progress=not args.quiet, threads="auto" if args.threads is None else args.threads,
-                        vtk=not args.no_vtk, workers=args.workers, scheduler=args.scheduler)
+                        vtk=not args.no_vtk, workers=args.workers, scheduler=args.scheduler, mpi=args.mpi)
     except StudyError as e:
-        print(f"ngtmc: error: {e}", file=sys.stderr)
+        say(f"ngtmc: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("ngtmc: interrupted; resume with --resume", file=sys.stderr)
+        say("ngtmc: interrupted; resume with --resume", file=sys.stderr)
         return 130
     except Exception as e:
-        print(f"ngtmc: run failed: {type(e).__name__}: {e}", file=sys.stderr)
+        say(f"ngtmc: run failed: {type(e).__name__}: {e}", file=sys.stderr)
         return 1
     report = out / "report.html"
-    print(f"report: {report.resolve()}" if report.exists() else out)
+    say(f"report: {report.resolve()}" if report.exists() else out)
     return 0
 
 

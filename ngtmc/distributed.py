@@ -20,8 +20,10 @@ What the solver must reduce (measured with NGSolve 6.2.2608, MPICH 5.0.2; each p
 plain numpy expression the serial code has always used, so serial results do not change.
 
 Supported so far: the single-pass and staggered schemes, displacement loads on boundaries,
-supports, densities given per region, no adaptive refinement, no run folder (``simulate``
-without ``out_dir``). :func:`check_supported` refuses the rest clearly.
+supports, densities given per region, no adaptive refinement, no run folder from ``simulate``
+(``out_dir``); the runner writes one from rank 0 (``ngtmc run --mpi``, ``run_study(mpi=True)``:
+history, metadata and report, without snapshots or checkpoints). :func:`check_supported` refuses
+the rest clearly.
 """
 from __future__ import annotations
 

@@ -21,6 +21,7 @@ import pytest
 
 import ngtmc
 from ngtmc.distributed import Ranks, _unsupported
+from ngtmc.study import StudyError
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -115,3 +116,73 @@ def test_serial_reductions_are_the_plain_values_and_unsupported_inputs_are_named
 
 class _SingleRank:
     size, rank = 1, 0
+
+
+STUDY = ROOT / "benchmarks" / "mpi_study.py"
+
+
+def _mpi_run(launcher, out, *extra):
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    return subprocess.run([launcher, "-n", "3", sys.executable, "-m", "mpi4py", "-m", "ngtmc", "run", str(STUDY),
+                           "--mpi", "--no-vtk", "-o", str(out), *extra],
+                          capture_output=True, text=True, timeout=600, env=env)
+
+
+@pytest.fixture(scope="module")
+def run_folders(tmp_path_factory):
+    """The MPI test scene as a study file, run by ``ngtmc run`` serially (in this process) and
+    with ``--mpi`` on 3 ranks."""
+    try:
+        import mpi4py  # noqa: F401
+    except ImportError:
+        _missing("mpi4py is not installed (pip install ngtmc[mpi])")
+    launcher = _launcher()
+    if launcher is None:
+        _missing("no mpiexec or mpirun found (pip install ngtmc[mpi] installs MPICH's)")
+    base = tmp_path_factory.mktemp("mpi_run")
+    serial = ngtmc.run_study(str(STUDY), output=base / "serial", report=False, vtk=False, progress=False)
+    proc = _mpi_run(launcher, base / "mpi")
+    assert proc.returncode == 0, f"mpiexec failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    return serial, base / "mpi", proc, launcher
+
+
+def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
+    """``mpiexec -n 3 python -m mpi4py -m ngtmc run STUDY --mpi``: rank 0 writes history, metadata
+    and report; the history is the serial run's (same steps and iteration counts, values within
+    1e-9 of their scale) through contact, the peak and the crack; the mesh is counted once; no
+    checkpoint and no snapshots are written (the fields are the ranks' own), and the report says
+    why it shows no fields. The other ranks print nothing and leave no scratch folder."""
+    import json
+    import pandas as pd
+    serial, par, proc, _ = run_folders
+    a, b = pd.read_csv(serial / "history.csv"), pd.read_csv(par / "history.csv")
+    assert a["min_J"].min() < 0.05 and a["max_alpha"].iloc[-1] == 1.0
+    assert a["force"].iloc[-1] < 0.1 * a["force"].max()
+    assert len(a) == len(b)
+    for col in ("newton_iterations", "cutbacks", "alpha_projected"):
+        assert (a[col] == b[col]).all(), col
+    for col in ("load", "force", "elastic_energy", "regularisation_energy", "fracture_energy", "max_alpha", "min_J"):
+        ref = a[col].to_numpy()
+        assert np.max(np.abs(b[col].to_numpy() - ref)) <= 1e-9 * max(np.max(np.abs(ref)), 1e-300), col
+    ms, mp = (json.loads((d / "metadata.json").read_text()) for d in (serial, par))
+    assert mp["status"] == "completed" and mp["mpi"] == {"ranks": 3} and "mpi" not in ms
+    for key in ("n_elements", "n_vertices", "ndof_u", "ndof_alpha", "h_min", "h_max", "displacement_order"):
+        assert mp["mesh"][key] == ms["mesh"][key], key
+    assert not (par / "checkpoint").exists() and not (par / "snapshots.npz").exists()
+    assert "computed on 3 MPI ranks" in (par / "report.html").read_text()
+    assert proc.stdout.count("report:") == 1
+    assert not list(Path(__import__("tempfile").gettempdir()).glob("ngtmc-rank*"))
+
+
+def test_ngtmc_run_mpi_refuses_what_it_cannot_do(run_folders, tmp_path):
+    """A scheme MPI does not support is refused by every rank before anything is solved (exit 2,
+    one message, no run folder); without several ranks, or with resume, run_study refuses at once."""
+    _, _, _, launcher = run_folders
+    proc = _mpi_run(launcher, tmp_path / "pf", "--set", "scheme=path-following")
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert proc.stderr.count("ngtmc: error:") == 1 and "scheme='path-following'" in proc.stderr
+    assert not (tmp_path / "pf" / "history.csv").exists()
+    with pytest.raises(StudyError, match="only MPI rank"):
+        ngtmc.run_study(str(STUDY), output=tmp_path / "one", mpi=True, report=False, progress=False)
+    with pytest.raises(StudyError, match="cannot resume"):
+        ngtmc.run_study(str(STUDY), output=tmp_path / "one", mpi=True, resume=True, progress=False)

@@ -311,6 +311,7 @@ def render_report(run_dir, output=None) -> Path:
         "speed": speed, "speed_meaningful": speed_meaningful,
         "time_split": time_split_rows(meta, history, cases),
         "mesh_info": mesh_info, "has_snapshots": bool(mesh_info or snap3d), "snap3d": snap3d,
+        "mpi_ranks": (meta.get("mpi") or {}).get("ranks"),
         "fig_ids": list(figs), "mesh_plot_ids": mesh_plot_ids,
         "fig_json": _script_json(_clean(figs)), "mesh_json": _script_json(_clean(meshes)),
         "mesh_plot_json": _script_json(mesh_plot_ids),

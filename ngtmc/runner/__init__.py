@@ -104,7 +104,7 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
               progress: bool | Callable = True, *, threads: int | str | None = "auto", checkpoint_every: int = 25,
               checkpoint_seconds: float = 30.0, vtk: bool = True,
               callbacks: Sequence[Callable] = (), workers: int | None = None,
-              scheduler: str | None = None) -> Path:
+              scheduler: str | None = None, mpi: bool = False) -> Path:
     """Run a named study and return the path of its run folder.
 
     Parameters
@@ -148,6 +148,13 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     scheduler : str, optional
         Address of an existing Dask scheduler to send the cases to instead (its workers must see
         the run folder and import ngtmc and the study).
+    mpi : bool
+        Every case on one mesh distributed over the MPI ranks this process belongs to
+        (``mpiexec -n 3 python -m mpi4py -m ngtmc run ... --mpi``; :mod:`ngtmc.distributed`, the
+        extra ``mpi``). Every rank calls this; rank 0 writes the run folder and the report
+        (history and metadata; no field snapshots, no ParaView series and no checkpoints, so no
+        resume). The schemes and conditions :func:`ngtmc.distributed.check_supported` refuses are
+        refused before anything is solved. See docs/parallel.md.
 
     Raises StepFailure (after writing the history and metadata with status "failed") when a step
     fails at the minimum increment, and StudyError, before any folder is created or anything
@@ -155,14 +162,40 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     values, a bad scene, threads < 1) or a resume that would mix parameters.
     """
     return _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
-                    checkpoint_seconds, vtk, callbacks, workers=workers, scheduler=scheduler).out
+                    checkpoint_seconds, vtk, callbacks, workers=workers, scheduler=scheduler, mpi=mpi).out
+
+
+def _mpi_world(resume: bool, parallel: bool):
+    """COMM_WORLD for ``mpi=True``; StudyError where MPI cannot run this (checked on every rank
+    alike, so that all of them stop)."""
+    if resume:
+        raise StudyError("mpi=True / --mpi cannot resume a run: an MPI run writes no checkpoints (its state "
+                         "is spread over the ranks)")
+    if parallel:
+        raise StudyError("mpi=True / --mpi runs one case at a time on all ranks: it does not combine with "
+                         "workers / scheduler (--workers, --scheduler)")
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        raise StudyError("mpi=True / --mpi needs mpi4py and an MPI: pip install ngtmc[mpi] "
+                         "(docs/parallel.md)") from None
+    comm = MPI.COMM_WORLD
+    if comm.size < 2:
+        raise StudyError("mpi=True / --mpi but this process is the only MPI rank: start it with "
+                         "mpiexec -n 3 python -m mpi4py -m ngtmc run ... --mpi (NGSolve gives rank 0 no "
+                         "elements, so 3 ranks compute on 2)")
+    return comm
 
 
 def _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
-             checkpoint_seconds, vtk, callbacks, *, workers=None, scheduler=None) -> "_Run":
+             checkpoint_seconds, vtk, callbacks, *, workers=None, scheduler=None, mpi=False) -> "_Run":
     """The work of :func:`run_study`; returns the finished run (its folder ``out``, and the
     Simulation of each case computed in this process in ``simulations``)."""
     parallel = workers is not None or scheduler is not None
+    comm = _mpi_world(resume, parallel) if mpi else None
+    root = comm is None or comm.rank == 0
+    if not root:  # the other ranks compute, rank 0 reports and writes
+        progress, report, vtk = False, False, False
     if parallel:
         from .parallel import check_settings
         check_settings(workers, scheduler)     # Dask installed, settings sane: before anything else
@@ -201,7 +234,10 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
             status, note = effective_status(old) if old else ("unknown", None)
             raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
                              "another output, or resume=True / --resume to continue it")
-    run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+    if not root:
+        import tempfile
+        out = Path(tempfile.mkdtemp(prefix=f"ngtmc-rank{comm.rank}-"))
+    run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm=comm)
     if resume:
         if meta is not None and meta.get("status") == "running":
             run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")
@@ -210,6 +246,8 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
     import ngsolve as ngs
     if auto and not parallel:
         threads = auto_threads(run.cases)
+    if comm is not None:
+        threads = 1  # one thread per rank
     if threads:
         ngs.SetNumThreads(int(threads))
     run.progress.say(f"resolution {res!r}, output {out}")
@@ -227,6 +265,10 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
         for plugin in outputs:
             plugin.finish("interrupted" if run.status == "interrupted" else "failed")
         raise
+    finally:
+        if not root:  # the other ranks' folder was only scratch
+            import shutil
+            shutil.rmtree(out, ignore_errors=True)
     run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
     for plugin in outputs:
         plugin.finish(run.status)

@@ -23,8 +23,10 @@ class _Run(RunFolder):
     over its cases (:meth:`run`)."""
 
     def __init__(self, mod, resolution, p, out, overrides, progress, checkpoint_every, checkpoint_seconds,
-                 callbacks, vtk):
+                 callbacks, vtk, comm=None):
         super().__init__(mod, resolution, p, out, overrides)
+        #: the MPI communicator whose ranks share each case's mesh (``run_study(mpi=True)``), else None
+        self.comm = comm
         self.checkpoint_every = int(checkpoint_every)
         self.checkpoint_seconds = float(checkpoint_seconds)
         self.callbacks = list(callbacks or [])
@@ -115,7 +117,15 @@ class _Run(RunFolder):
                 bad = sorted(set(case.options or {}) - allowed)
                 if bad:
                     raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
-                case.build_scene().check()
+                scene = case.build_scene()
+                scene.check()
+                if self.comm is not None:
+                    from ..distributed import _unsupported
+                    what = _unsupported(scene, (case.options or {}).get("scheme", "single-pass"),
+                                        (case.options or {}).get("adapt"))
+                    if what:
+                        raise ValueError("on MPI ranks (--mpi) ngtmc does not support yet: " + "; ".join(what)
+                                         + " (docs/parallel.md)")
             except (ValueError, TypeError) as e:
                 raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
 
@@ -154,10 +164,13 @@ class _Run(RunFolder):
         self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: building the scene ({case.label})")
         cpu0 = time.process_time() - float((ck or {}).get("case_meta", {}).get("cpu_time_s", 0.0))
         t_build = time.perf_counter()
-        scene = case.build_scene()
+        scene = serial = case.build_scene()
+        if self.comm is not None:
+            from ..distributed import distribute
+            scene = distribute(serial, self.comm, curve=serial.mesh.GetCurveOrder())
         sim = Simulation(scene, case.schedule, case.control, progress=False, **(case.options or {}))
         build_time = time.perf_counter() - t_build
-        mesh_info = _mesh_info(sim.solver)
+        mesh_info = _mesh_info(sim.solver, serial if self.comm is not None else None)
         mesh_info["dim"] = scene.dim
         if self.mesh is None:
             self.mesh = dict(mesh_info)
@@ -177,7 +190,8 @@ class _Run(RunFolder):
                           f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
-        snaps = Snapshots(case, sim.solver, vtk_dir)
+        # on MPI ranks the fields are the ranks' own: no snapshots (and no checkpoints, below)
+        snaps = Snapshots(case, sim.solver, vtk_dir) if self.comm is None else _NoSnapshots()
         if ck is not None:
             sim.set_state(ck["state"])
             if ck["snap"]:
@@ -191,7 +205,8 @@ class _Run(RunFolder):
         def save(state):
             self.snaps[case.name] = snaps.arrays(case.name)
             cm["cpu_time_s"] = time.process_time() - cpu0
-            self.save_checkpoint(case, state, snaps, done=False)
+            if self.comm is None:
+                self.save_checkpoint(case, state, snaps, done=False)
             self.write_all()
 
         checkpoints = CheckpointOutput(sim, save, self.checkpoint_every, self.checkpoint_seconds)
@@ -220,7 +235,8 @@ class _Run(RunFolder):
                 res["error"] = error
             self.results[case.name] = res
             self.snaps[case.name] = snaps.arrays(case.name)
-            self.save_checkpoint(case, state, snaps, done=(status == "completed"))
+            if self.comm is None:
+                self.save_checkpoint(case, state, snaps, done=(status == "completed"))
 
         try:
             for row in sim.steps():       # the accepted steps, each through the case's plugins
@@ -280,6 +296,24 @@ class _Run(RunFolder):
             raise
         self.status = "completed"
         self.write_all()
+
+
+class _NoSnapshots:
+    """The snapshots of a case on MPI ranks: none (each rank holds its own part of the fields)."""
+
+    steps: list = []
+
+    def maybe_take(self, prev_load, row, final=False):
+        pass
+
+    def take(self, row):
+        pass
+
+    def arrays(self, name):
+        return {}
+
+    def state(self):
+        return {}
 
 
 def peak_memory_mb() -> float:

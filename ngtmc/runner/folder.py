@@ -44,10 +44,16 @@ def _threads():
 
 
 # ====================================================================== metadata pieces
-def _mesh_info(solver) -> dict:
-    mesh = solver.mesh
-    h = solver.h if getattr(solver, "h", None) is not None else solver.scene.element_sizes()
-    nd = solver.ndof
+def _mesh_info(solver, serial=None) -> dict:
+    """Elements, vertices, dofs and element sizes (mm) of a solver's mesh. ``serial``: for a solver
+    on MPI ranks, the serial scene every rank built (its mesh is counted; dofs once over the ranks)."""
+    if serial is not None:
+        mesh, h = serial.mesh, serial.element_sizes()
+        nd = {"u": solver.fes_u.ndofglobal, "alpha": solver.fes_a.ndofglobal if solver.fes_a is not None else 0}
+    else:
+        mesh = solver.mesh
+        h = solver.h if getattr(solver, "h", None) is not None else solver.scene.element_sizes()
+        nd = solver.ndof
     return {"n_elements": int(mesh.ne), "n_vertices": int(mesh.nv), "ndof_u": int(nd["u"]),
             "ndof_alpha": int(nd["alpha"]), "h_min": float(np.min(h)), "h_max": float(np.max(h)),
             "displacement_order": (f"{solver.order} in {', '.join(_names(solver.scene.regulariser.regions))}, 1 elsewhere"
@@ -184,6 +190,9 @@ class RunFolder:
             meta["features"] = dict(self.features)
         if self.parallel:
             meta["parallel"] = dict(self.parallel)
+        comm = getattr(self, "comm", None)
+        if comm is not None:
+            meta["mpi"] = {"ranks": int(comm.size)}
         if self.error:
             meta["error"] = self.error
         return meta
