@@ -199,7 +199,11 @@ N/mm: as a flat notch about 0.07 mm (2.5 l0) shallower (depths 0.40, 0.38, 0.35 
 0.0075 mm slit's (max alpha 0.32 against 0.42 at 0.04 mm); docs/fidelity.md. The gain shrinks
 as the mesh refines (window, V against flat: +9.8 %, +7.2 %, +6.3 % at quick, medium, paper; at
 paper 40.04 against 37.66 N/mm, -4.7 % and -10.3 % from Ambati; indenter: +7.6 %, +7.2 % at
-quick, medium). **Fracture excluded under the
+quick, medium). Two bisections of the elements within 2 l0 of the notch tip (quick, window,
+path following; ``python -m benchmarks.notch_apex``) lower the V's peak from 41.06 to 38.35 N/mm
+and the flat notch's from 37.17 to 36.14 N/mm: the V's excess falls from +10.5 % to +6.1 %, so
+about 40 % of it at quick is the discretisation of its apex (narrower than an element); the
+rest is not explained (docs/fidelity.md). **Fracture excluded under the
 load (+0.2 %, +0.4 % with the window) or allowed at the supports (-0.2 %) does not move the
 peak.** The linear-elastic reference (:func:`linear_elastic_slope`, window load, flat notch) is
 0.912 N/mm per micrometre converged, equal to Ambati's 0.915 within 0.5 %, and 0.959 with the
