@@ -141,9 +141,16 @@ def run_folders(tmp_path_factory):
         _missing("no mpiexec or mpirun found (pip install ngtmc[mpi] installs MPICH's)")
     base = tmp_path_factory.mktemp("mpi_run")
     serial = ngtmc.run_study(str(STUDY), output=base / "serial", report=False, vtk=False, progress=False)
+    scratch_before = _scratch_folders()
     proc = _mpi_run(launcher, base / "mpi")
     assert proc.returncode == 0, f"mpiexec failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
-    return serial, base / "mpi", proc, launcher
+    return serial, base / "mpi", proc, launcher, _scratch_folders() - scratch_before
+
+
+def _scratch_folders() -> set:
+    """The scratch folders of the ranks other than 0 in the temporary directory."""
+    import tempfile
+    return set(Path(tempfile.gettempdir()).glob("ngtmc-rank*"))
 
 
 def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
@@ -154,7 +161,7 @@ def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
     why it shows no fields. The other ranks print nothing and leave no scratch folder."""
     import json
     import pandas as pd
-    serial, par, proc, _ = run_folders
+    serial, par, proc, _, left = run_folders
     a, b = pd.read_csv(serial / "history.csv"), pd.read_csv(par / "history.csv")
     assert a["min_J"].min() < 0.05 and a["max_alpha"].iloc[-1] == 1.0
     assert a["force"].iloc[-1] < 0.1 * a["force"].max()
@@ -171,14 +178,16 @@ def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
     assert not (par / "checkpoint").exists() and not (par / "snapshots.npz").exists()
     assert "computed on 3 MPI ranks" in (par / "report.html").read_text()
     assert proc.stdout.count("report:") == 1
-    assert not list(Path(__import__("tempfile").gettempdir()).glob("ngtmc-rank*"))
+    assert not left
 
 
 def test_ngtmc_run_mpi_refuses_what_it_cannot_do(run_folders, tmp_path):
     """A scheme MPI does not support is refused by every rank before anything is solved (exit 2,
     one message, no run folder); without several ranks, or with resume, run_study refuses at once."""
-    _, _, _, launcher = run_folders
+    _, _, _, launcher, _ = run_folders
+    before = _scratch_folders()
     proc = _mpi_run(launcher, tmp_path / "pf", "--set", "scheme=path-following")
+    assert not _scratch_folders() - before
     assert proc.returncode == 2, proc.stderr[-2000:]
     assert proc.stderr.count("ngtmc: error:") == 1 and "scheme='path-following'" in proc.stderr
     assert not (tmp_path / "pf" / "history.csv").exists()

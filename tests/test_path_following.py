@@ -259,46 +259,66 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
     np.testing.assert_array_equal(s.u.vec.FV().NumPy(), before)
 
 
-def test_a_dissipation_step_that_would_move_the_load_too_far_is_refused():
-    """max_load_step: a bordered Newton step whose load change exceeds it is not taken (the
-    damage hardly responds to the load; the quick L-panel's arrested crack asked for 5e11 mm and
-    inverted elements at every line-search length). The solve fails with load_unresponsive set
-    and leaves the start state; with a bound the step respects, it converges as without one."""
+def test_a_failed_dissipation_solve_says_when_it_asked_for_too_large_a_load_step():
+    """max_load_step: a dissipation solve that fails after a bordered Newton step asked to move the
+    load by more than it sets load_unresponsive (the damage hardly responds to the load: the quick
+    L-panel's arrested crack asked for 5e11 mm and inverted elements at every line-search
+    length); a solve that converges is not affected (the first iterations of a snap may ask for
+    more than the schedule), and a failure without such a step does not set it."""
     sim = _loaded(0.005)
     s, c = sim.solver, sim.coupled
-    start = s.get_state()
     assert s.solve_displacement(0.0051).converged
     moved = s.get_state()
-    res = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012), max_load_step=1e-9)
-    assert not res.converged and c.load_unresponsive
-    assert "does not respond to the load" in res.message
-    np.testing.assert_array_equal(s.u.vec.FV().NumPy(), moved["u"])
-    s.set_state(moved)
     free = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012))
     assert free.converged and not c.load_unresponsive
     lam = c.load_solved
-    s.set_state(start)
-    assert s.solve_displacement(0.0051).converged
-    capped = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012), max_load_step=1.0)
+    s.set_state(moved)
+    capped = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012), max_load_step=1e-9)
     assert capped.converged and not c.load_unresponsive
     assert c.load_solved == pytest.approx(lam, rel=1e-12)
+    c.max_iterations = 1
+    s.set_state(moved)
+    res = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012), max_load_step=1e-9)
+    assert not res.converged and c.load_unresponsive
+    s.set_state(moved)
+    res = c.solve(0.0051, dissipation=0.05, load_bounds=(0.0, 0.012))
+    assert not res.converged and not c.load_unresponsive
 
 
-def test_path_following_takes_a_displacement_step_where_the_damage_does_not_respond(monkeypatch):
-    """Where a dissipation step's Newton iteration would move the load by more than
-    LOAD_STEP_LIMIT du_max, the step becomes a displacement step of the proposed increment (rule
-    3 of ngtmc.path): with the limit at 1e-9 du_max no dissipation step is ever accepted, and the
-    run goes on by displacement steps (to 0.0055 mm, before the snap-back, which fixed-load steps
-    cannot pass)."""
-    import ngtmc.path as path_module
-    ref = ngtmc.Simulation(_plate(), 0.0055, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                           scheme="path-following")
+def _failing_dissipation(sim, unresponsive: bool):
+    """Make every dissipation solve of ``sim`` fail (load_unresponsive as given)."""
+    from ngtmc.displacement_newton import NewtonResult
+    c = sim.coupled
+    solve = c.solve
+
+    def failing(load, alpha_upper=None, dissipation=None, load_bounds=None, max_load_step=None):
+        if dissipation is None:
+            return solve(load, alpha_upper, dissipation, load_bounds, max_load_step)
+        c.load_unresponsive = unresponsive
+        c.load_out_of_bounds = None
+        return NewtonResult(False, 1, 1.0, 0.0, 0.0, 0, "made to fail")
+    c.solve = failing
+
+
+def test_path_following_takes_a_displacement_step_where_the_damage_does_not_respond():
+    """Where the last attempt of a step (du < 2 du_min) fails as a dissipation step whose Newton
+    iteration asked for too large a load step, the step becomes a displacement step of du (rule 3
+    of ngtmc.path): with every dissipation solve failing so, the run goes on by displacement steps
+    alone (to 0.0055 mm, before the snap-back, which fixed-load steps cannot pass); with the same
+    failures not flagged, it fails at du_min as before."""
+    def sim():
+        return ngtmc.Simulation(_plate(), 0.0055, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=0.6e-3),
+                                scheme="path-following")
+    ref = sim()
     ref.run()
     assert ref._path.dissipation_steps > 0
-    monkeypatch.setattr(path_module, "LOAD_STEP_LIMIT", 1e-9)
-    sim = ngtmc.Simulation(_plate(), 0.0055, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                           scheme="path-following")
-    h = sim.run().history
-    assert sim._path.dissipation_steps == 0
+    a = sim()
+    _failing_dissipation(a, unresponsive=True)
+    h = a.run().history
+    assert a._path.dissipation_steps == 0
     assert h["load"].iloc[-1] == pytest.approx(0.0055)
     assert np.all(np.diff(h["load"].to_numpy()) > 0)
+    b = sim()
+    _failing_dissipation(b, unresponsive=False)
+    with pytest.raises(ngtmc.StepFailure, match="made to fail"):
+        b.run()

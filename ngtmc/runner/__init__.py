@@ -235,8 +235,22 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
             raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
                              "another output, or resume=True / --resume to continue it")
     if not root:
+        import shutil
         import tempfile
-        out = Path(tempfile.mkdtemp(prefix=f"ngtmc-rank{comm.rank}-"))
+        scratch = Path(tempfile.mkdtemp(prefix=f"ngtmc-rank{comm.rank}-"))
+        try:
+            return _run_here(mod, res, p, scratch, typed, progress, checkpoint_every, checkpoint_seconds, callbacks,
+                             vtk, comm, resume, meta, threads, auto, parallel, report, workers, scheduler)
+        finally:  # the other ranks' folder is only scratch
+            shutil.rmtree(scratch, ignore_errors=True)
+    return _run_here(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm,
+                     resume, meta, threads, auto, parallel, report, workers, scheduler)
+
+
+def _run_here(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm, resume,
+              meta, threads, auto, parallel, report, workers, scheduler) -> "_Run":
+    """The run of :func:`_execute` once its parameters and folder are settled: validation, threads,
+    the cases and the report."""
     run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm=comm)
     if resume:
         if meta is not None and meta.get("status") == "running":
@@ -265,10 +279,6 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
         for plugin in outputs:
             plugin.finish("interrupted" if run.status == "interrupted" else "failed")
         raise
-    finally:
-        if not root:  # the other ranks' folder was only scratch
-            import shutil
-            shutil.rmtree(out, ignore_errors=True)
     run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
     for plugin in outputs:
         plugin.finish(run.status)
