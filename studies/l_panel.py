@@ -98,15 +98,15 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   (main case) completes in 169 steps and 762 iterations; its first loading reaches 18.08 kN and
   the reload peak is 18.60 kN at 6.311 mm (single-pass: 23.62 kN). Against Ambati's 16 kN the
   converged quick peak is +15.3 %, just outside the ±15 % of the test (still an expected failure).
-  Measured again on 2026-12-02 (``MEASURED["quick_path_following_2026_12_02"]``, 400 s on two
-  workers): the main case is the same (18.08 kN at 6.3 mm, reload peak 18.60 kN at 6.311 mm,
-  no W_f growth on unloading) in 294 steps and 1077 iterations; the monotonic case samples its
-  peak at 18.62 kN at 6.306 mm (368 steps, 1350 iterations). The monotonic case had failed where
-  its crack arrests (6.284 mm, 10.3 kN): the bordered Newton step of a dissipation step asked
-  for a load change of 5e11 mm, since the damage no longer responds to the load, and inverted
-  elements at every line-search length; such a step is now a displacement step
-  (``ngtmc.path.LOAD_STEP_LIMIT``). Both cases take about twice the steps of 2026-11-25; which
-  change since then costs them is not measured.
+  Measured again on 2026-12-02 (``MEASURED["quick_path_following_2026_12_02"]``): the main case
+  is the same (18.08 kN at 6.3 mm, reload peak 18.60 kN at 6.311 mm, no W_f growth on
+  unloading) in 294 steps and 1077 iterations; the monotonic case samples its peak at 18.62 kN
+  at 6.306 mm (370 steps, 1242 iterations, 249 s alone). The monotonic case had failed where its
+  crack arrests (6.284 mm, 10.3 kN): the bordered Newton step of a dissipation step asked for a
+  load change of 5e11 mm, since the damage no longer responds to the load, and inverted
+  elements at every line-search length; the last attempt of such a step is now a displacement
+  step (``ngtmc.path.LOAD_STEP_LIMIT``). Both cases take about twice the steps of 2026-11-25;
+  which change since then costs them is not measured.
 * At u = l_h the force is 4.8 kN on first loading (not "about zero": the third medium between the
   curved indenter and the arm is squeezed over some 20 mm and carries load from about 5.8 mm on;
   approach-only runs gave F(6.0) = 5.4 kN with 2.5 mm void elements and 4.8 kN with 0.5 mm ones at
@@ -299,11 +299,15 @@ MEASURED = {
                                                 "(2026-12-02, commit 2333a3a). The monotonic case had failed at "
                                                 "6.284 mm where its crack arrested (a bordered Newton step asking "
                                                 "for a load change of 5e11 mm), since at least 2026-12-01; with "
-                                                "ngtmc.path.LOAD_STEP_LIMIT it takes displacement steps there",
+                                                "ngtmc.path.LOAD_STEP_LIMIT it takes displacement steps there. "
+                                                "Case main with the rule's first version (commit 2333a3a, "
+                                                "--workers 2, 400 s); case monotonic with the final rule (commit "
+                                                "dedeec6, alone; the first version: 368 steps, 1350 iterations, "
+                                                "the same peak)",
                                         "monotonic_peak_force": 18621, "monotonic_peak_load": 6.3064,
-                                        "monotonic_steps": 368, "monotonic_newton_iterations": 1350,
-                                        "monotonic_cutbacks": 14, "monotonic_wall_time_s": 373,
-                                        "monotonic_final_force": 9517, "main_steps": 294,
+                                        "monotonic_steps": 370, "monotonic_newton_iterations": 1242,
+                                        "monotonic_cutbacks": 15, "monotonic_wall_time_s": 249,
+                                        "monotonic_final_force": 9386, "main_steps": 294,
                                         "main_newton_iterations": 1077, "main_cutbacks": 7, "main_wall_time_s": 319,
                                         "first_loading_force_at_6.3": 18079, "unload_wf_lag": 0.0,
                                         "reload_peak_force": 18598, "reload_peak_load": 6.3108, "main_final_force": 8309,
