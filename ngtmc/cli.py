@@ -158,7 +158,7 @@ def _cmd_run(args) -> int:
             rank = MPI.COMM_WORLD.rank
         except ImportError:
             pass  # run_study says what is missing
-    say = (lambda *a, **k: print(*a, **k)) if rank == 0 else (lambda *a, **k: None)
+    say = print if rank == 0 else (lambda *a, **k: None)
     try:
         out = run_study(args.name, resolution=args.resolution, output=args.output, overrides=overrides,
                         report=False if args.no_report else None, resume=args.resume,

@@ -10,6 +10,8 @@ Units: those of the tangent (N/mm for u-u entries, N mm for alpha-alpha, per thi
 """
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import ngsolve as ngs
 
@@ -60,6 +62,18 @@ class CoupledLinearSolver:
             self._diag = (np.nonzero(on)[0], rows[on], vals.size)
         return vals, self._diag[0], self._diag[1]
 
+    @contextlib.contextmanager
+    def _diagonal_added(self, shift: np.ndarray):
+        """Within the block, the assembled matrix's diagonal entries hold ``shift`` (per dof) more;
+        restored afterwards."""
+        vals, pos, row = self._diagonal()
+        keep = vals[pos].copy()
+        vals[pos] = keep + shift[row]
+        try:
+            yield
+        finally:
+            vals[pos] = keep
+
     def shifted(self, free: np.ndarray, mu: float):
         """Factorization of the tangent with its diagonal on the ``free`` dofs increased by mu
         times its magnitude (Levenberg); the assembled matrix is restored. Block-GMRES keeps its
@@ -67,18 +81,12 @@ class CoupledLinearSolver:
         solvers factorize the shifted matrix. Returns solve(rhs, out)."""
         A = self.form.mat
         vals, pos, row = self._diagonal()
-        keep = vals[pos].copy()
-        shift = np.where(free[row], mu * np.abs(keep), 0.0)
-        vals[pos] = keep + shift
-        try:
+        shift = np.zeros(A.height)
+        shift[row] = np.where(free[row], mu * np.abs(vals[pos]), 0.0)
+        with self._diagonal_added(shift):
             if self.linear_solver == "block-gmres":
-                d = np.zeros(A.height)
-                d[row] = shift
-                return self._block_solver(free, diagonal_shift=d)
-            inv = A.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver)
-        finally:
-            vals[pos] = keep
-        return _applying(inv)
+                return self._block_solver(free, diagonal_shift=shift)
+            return _applying(A.Inverse(ngs.BitArray(free.tolist()), inverse=self.linear_solver))
 
     def diagonal_scale(self) -> np.ndarray:
         """1 / diagonal of the assembled tangent's alpha-alpha block (per unit of R_alpha)."""
@@ -123,20 +131,11 @@ class CoupledLinearSolver:
         op = _Masked(A, free, diagonal_shift)
         pre = _BlockLower(A, self._inv_u, inv_a)
         direct = []
-        if diagonal_shift is not None:
-            vals, pos, row = self._diagonal()
-            dpos = diagonal_shift[row]
 
         def direct_inverse():
             """UMFPACK of the matrix (with the diagonal shift)."""
-            if diagonal_shift is None:
+            with self._diagonal_added(diagonal_shift) if diagonal_shift is not None else contextlib.nullcontext():
                 return A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
-            keep = vals[pos].copy()
-            vals[pos] = keep + dpos
-            try:
-                return A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
-            finally:
-                vals[pos] = keep
 
         def solve(rhs, out):
             rhsN = rhs.FV().NumPy()

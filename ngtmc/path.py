@@ -264,11 +264,7 @@ class DissipationPath:
                 # still too far: the crack has stopped growing; a displacement step instead,
                 # and leave dissipation control
                 self.dissipating = False
-                s.set_state(saved)
-                ok, info = self._fixed(sch.load(t_new), info)
-                if ok:
-                    info["t_new"] = t_new
-                return ok, info
+                return self._displacement_step(saved, t_new, info)
             slow = dD_small < 0.25 * dD  # slow growth: try displacement steps again next
         if self._converged_dissipation(r, info, t0, t1):
             self.dissipation_steps += 1
@@ -281,22 +277,23 @@ class DissipationPath:
             # the crack has arrested, and this is the step's last attempt before the run would fail
             # at du_min: a displacement step of du instead, and leave dissipation control
             self.dissipating = False
-            s.set_state(saved)
-            ok, info = self._fixed(sch.load(t_new), info)
-            if ok:
-                info["t_new"] = t_new
-            return ok, info
+            return self._displacement_step(saved, t_new, info)
         out = self.coupled.load_out_of_bounds
         past_end = out is not None and direction * (out - l_b) > 0
         if past_end:
             # the dissipation dD is not reached on this segment: a displacement step to its end
-            s.set_state(saved)
-            ok, info = self._fixed(l_b, info)
-            if ok:
-                info["t_new"] = t1
-            return ok, info
+            return self._displacement_step(saved, t1, info)
         info["message"] = f"dissipation step of {dD:.4g} N mm: {r.message}"
         return False, info
+
+    def _displacement_step(self, saved: dict, t_new: float, info: dict):
+        """Instead of a dissipation step: from the state ``saved`` (the last accepted one), a
+        displacement step to the load of pseudo-time ``t_new``; returns (ok, info) as :meth:`attempt`."""
+        self.sim.solver.set_state(saved)
+        ok, info = self._fixed(self.sim.schedule.load(t_new), info)
+        if ok:
+            info["t_new"] = t_new
+        return ok, info
 
     def _converged_dissipation(self, r, info: dict, t0: float, t1: float) -> bool:
         """Whether the dissipation solve ``r`` ended in an acceptable state: converged with a finite

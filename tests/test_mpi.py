@@ -45,8 +45,8 @@ def _missing(reason: str):
     pytest.skip(reason)
 
 
-@pytest.fixture(scope="module")
-def runs(tmp_path_factory):
+def _mpi_launcher() -> str:
+    """The MPI launcher; skips (fails under CI=true) without mpi4py or a launcher."""
     try:
         import mpi4py  # noqa: F401
     except ImportError:
@@ -54,6 +54,12 @@ def runs(tmp_path_factory):
     launcher = _launcher()
     if launcher is None:
         _missing("no mpiexec or mpirun found (pip install ngtmc[mpi] installs MPICH's)")
+    return launcher
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    launcher = _mpi_launcher()
     out = tmp_path_factory.mktemp("mpi") / "history.json"
     env = dict(os.environ, OMP_NUM_THREADS="1",
                PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
@@ -132,13 +138,7 @@ def _mpi_run(launcher, out, *extra):
 def run_folders(tmp_path_factory):
     """The MPI test scene as a study file, run by ``ngtmc run`` serially (in this process) and
     with ``--mpi`` on 3 ranks."""
-    try:
-        import mpi4py  # noqa: F401
-    except ImportError:
-        _missing("mpi4py is not installed (pip install ngtmc[mpi])")
-    launcher = _launcher()
-    if launcher is None:
-        _missing("no mpiexec or mpirun found (pip install ngtmc[mpi] installs MPICH's)")
+    launcher = _mpi_launcher()
     base = tmp_path_factory.mktemp("mpi_run")
     serial = ngtmc.run_study(str(STUDY), output=base / "serial", report=False, vtk=False, progress=False)
     scratch_before = _scratch_folders()

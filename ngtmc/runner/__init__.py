@@ -34,8 +34,11 @@ a user's own scene (:mod:`ngtmc.runner.user_scene`).
 """
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import os
+import shutil
+import tempfile
 from pathlib import Path
 from types import ModuleType
 from typing import Callable, Sequence
@@ -234,55 +237,53 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
             status, note = effective_status(old) if old else ("unknown", None)
             raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
                              "another output, or resume=True / --resume to continue it")
-    if not root:
-        import shutil
-        import tempfile
-        scratch = Path(tempfile.mkdtemp(prefix=f"ngtmc-rank{comm.rank}-"))
+    with _rank_folder(out, comm) as out:
+        run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm=comm)
+        if resume:
+            if meta is not None and meta.get("status") == "running":
+                run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")
+            run.prepare_resume(meta)
+        run.validate()     # bad input is refused here, before any folder is created or any step solved
+        import ngsolve as ngs
+        if auto and not parallel:
+            threads = auto_threads(run.cases)
+        if comm is not None:
+            threads = 1  # one thread per rank
+        if threads:
+            ngs.SetNumThreads(int(threads))
+        run.progress.say(f"resolution {res!r}, output {out}")
+        # outputs of the whole run (those of each case: _Run.run_case)
+        outputs = [ReportOutput(out, strict=bool(report))] if (report or report is None) else []
+        run_cases = None
+        if parallel:
+            from .parallel import ParallelCases
+            run_cases = ParallelCases(run, workers, scheduler, threads)
         try:
-            return _run_here(mod, res, p, scratch, typed, progress, checkpoint_every, checkpoint_seconds, callbacks,
-                             vtk, comm, resume, meta, threads, auto, parallel, report, workers, scheduler)
-        finally:  # the other ranks' folder is only scratch
-            shutil.rmtree(scratch, ignore_errors=True)
-    return _run_here(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm,
-                     resume, meta, threads, auto, parallel, report, workers, scheduler)
-
-
-def _run_here(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm, resume,
-              meta, threads, auto, parallel, report, workers, scheduler) -> "_Run":
-    """The run of :func:`_execute` once its parameters and folder are settled: validation, threads,
-    the cases and the report."""
-    run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm=comm)
-    if resume:
-        if meta is not None and meta.get("status") == "running":
-            run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")
-        run.prepare_resume(meta)
-    run.validate()     # bad input is refused here, before any folder is created or any step solved
-    import ngsolve as ngs
-    if auto and not parallel:
-        threads = auto_threads(run.cases)
-    if comm is not None:
-        threads = 1  # one thread per rank
-    if threads:
-        ngs.SetNumThreads(int(threads))
-    run.progress.say(f"resolution {res!r}, output {out}")
-    # outputs of the whole run (those of each case: _Run.run_case)
-    outputs = [ReportOutput(out, strict=bool(report))] if (report or report is None) else []
-    run_cases = None
-    if parallel:
-        from .parallel import ParallelCases
-        run_cases = ParallelCases(run, workers, scheduler, threads)
-    try:
-        with _terminate_as_interrupt(), ngs.TaskManager():
-            run.run(resume, meta, run_cases)
-    except BaseException:
-        # a failed or interrupted run still gets its report (with a status banner): nothing is lost
+            with _terminate_as_interrupt(), ngs.TaskManager():
+                run.run(resume, meta, run_cases)
+        except BaseException:
+            # a failed or interrupted run still gets its report (with a status banner): nothing is lost
+            for plugin in outputs:
+                plugin.finish("interrupted" if run.status == "interrupted" else "failed")
+            raise
+        run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
         for plugin in outputs:
-            plugin.finish("interrupted" if run.status == "interrupted" else "failed")
-        raise
-    run.progress.say(f"finished in {run.wall_time():.0f} s: {out}")
-    for plugin in outputs:
-        plugin.finish(run.status)
-    return run
+            plugin.finish(run.status)
+        return run
+
+
+@contextlib.contextmanager
+def _rank_folder(out: Path, comm):
+    """The folder this process writes the run into: ``out``, except on the MPI ranks other than 0
+    (``mpi=True``), which compute only: there a scratch folder, removed afterwards."""
+    if comm is None or comm.rank == 0:
+        yield out
+        return
+    scratch = Path(tempfile.mkdtemp(prefix=f"ngtmc-rank{comm.rank}-"))
+    try:
+        yield scratch
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 class _terminate_as_interrupt:

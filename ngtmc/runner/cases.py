@@ -119,14 +119,11 @@ class _Run(RunFolder):
                     raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
                 scene = case.build_scene()
                 scene.check()
-                if self.comm is not None:
-                    from ..distributed import _unsupported
-                    what = _unsupported(scene, (case.options or {}).get("scheme", "single-pass"),
-                                        (case.options or {}).get("adapt"))
-                    if what:
-                        raise ValueError("on MPI ranks (--mpi) ngtmc does not support yet: " + "; ".join(what)
-                                         + " (docs/parallel.md)")
-            except (ValueError, TypeError) as e:
+                if self.comm is not None:  # what the distributed scene will refuse, refused before anything runs
+                    from ..distributed import _refuse, _unsupported
+                    _refuse(_unsupported(scene, (case.options or {}).get("scheme", "single-pass"),
+                                         (case.options or {}).get("adapt")))
+            except (ValueError, TypeError, NotImplementedError) as e:
                 raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
 
     # ------------------------------------------------------------ one case
