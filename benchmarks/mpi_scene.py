@@ -77,7 +77,7 @@ def main(out: str):
     summed_energy = s._energy(s.u.vec)             # ngtmc: summed over ranks (a collective call)
     refused = ""
     try:
-        ngtmc.Simulation(sc, LOAD, scheme="monolithic")
+        ngtmc.Simulation(sc, LOAD, adapt=ngtmc.Adaptivity(h_crack=0.0125))
     except NotImplementedError as e:
         refused = str(e)
     if comm.rank == 0:

@@ -151,14 +151,25 @@ def _cmd_run(args) -> int:
     except ValueError as e:
         print(f"ngtmc: error: {e}", file=sys.stderr)
         return 2
-    rank = 0
+    rank, comm = 0, None
     if args.mpi:
         try:
             from mpi4py import MPI
-            rank = MPI.COMM_WORLD.rank
+            comm = MPI.COMM_WORLD
+            rank = comm.rank
         except ImportError:
             pass  # run_study says what is missing
-    say = print if rank == 0 else (lambda *a, **k: None)
+
+    def say(*a, **k):
+        """Print on rank 0 only; on MPI ranks every rank then waits (at most MPI_SETTLE_S) for the
+        others, so that a rank's exit, which makes mpi4py abort the job, cannot cut rank 0's
+        message off (seen: the refusal of a case printed nothing, rank 2 had aborted first)."""
+        if rank == 0:
+            print(*a, **k)
+            sys.stdout.flush()
+            sys.stderr.flush()
+        if comm is not None and comm.size > 1:
+            _settle(comm)
     try:
         out = run_study(args.name, resolution=args.resolution, output=args.output, overrides=overrides,
                         report=False if args.no_report else None, resume=args.resume,
@@ -176,6 +187,22 @@ def _cmd_run(args) -> int:
     report = out / "report.html"
     say(f"report: {report.resolve()}" if report.exists() else out)
     return 0
+
+
+#: Longest wait of an MPI rank for the others before it exits (s): ranks that all exit pass at
+#: once; one whose fellows still compute (a failure on one rank only) does not hang.
+MPI_SETTLE_S = 10.0
+
+
+def _settle(comm):
+    """Wait until every rank of ``comm`` arrived here, or MPI_SETTLE_S passed."""
+    import time
+    req = comm.Ibarrier()
+    t0 = time.monotonic()
+    while not req.Test():
+        if time.monotonic() - t0 > MPI_SETTLE_S:
+            return
+        time.sleep(0.01)
 
 
 def _cmd_report(args) -> int:

@@ -180,8 +180,9 @@ class CoupledNewton:
         self._free_base = np.array(list(self.X.FreeDofs()), dtype=bool)
         self._free_base[:self.nu] = s._free_np  # vertex conditions live in the solver's mask
         #: factorizations of the assembled tangent (:mod:`ngtmc.coupled_linear`)
-        self.lin = CoupledLinearSolver(self.form, self.nu, self.linear_solver, *self._gmres)
+        self.lin = CoupledLinearSolver(self.form, self.nu, self.linear_solver, *self._gmres, ranks=s.ranks)
         self._r = self.x.vec.CreateVector()
+        self._rc = self.x.vec.CreateVector()  # MPI: a residual with its ranks' parts summed
         self._dx = self.x.vec.CreateVector()
         self._w = self.x.vec.CreateVector()
         self._tmp = self.x.vec.CreateVector()
@@ -191,10 +192,12 @@ class CoupledNewton:
         lump = ngs.LinearForm(s.fes_a)
         lump += s.Gc / s.l0 * b * ngs.dx(definedon=s.mesh.Materials(s._frac_re))
         lump.Assemble()
+        if s.ranks.parallel:
+            lump.vec.Cumulate()
         d = lump.vec.FV().NumPy().copy()
-        self.alpha_residual_scale = float(np.linalg.norm(d))
+        self.alpha_residual_scale = s.ranks.norm_of(d, lump.vec)
         # scale of the complementarity function: alpha - bound against R_alpha / d (dimensionless)
-        self._ncp_scale = 1.0 / np.maximum(d, 1e-300 * max(d.max(), 1e-300))
+        self._ncp_scale = 1.0 / np.maximum(d, 1e-300 * max(s.ranks.max(d), 1e-300))
 
     def _build_form(self):
         """The coupled residual form (non-symmetric). The degraded elastic energy enters as a
@@ -215,7 +218,8 @@ class CoupledNewton:
         s = self.s
         (u, a), (_, b) = self.X.TnT()
         A = bilinear_form(self.X, symmetric=False)
-        K = bilinear_form(self.X, symmetric=False)
+        # MPI: the constant-tangent wrapper adds the ranks' local matrices; the terms are folded in
+        K = A if s.ranks.parallel else bilinear_form(self.X, symmetric=False)
         for name, density, regions in merged_terms(s.energy_terms(u, alpha=a)):
             if name == "regularisation" and s.scene.regulariser.damping == "none":
                 # quadratic in u: constant tangent, assembled once (not worth a compilation)
@@ -226,6 +230,8 @@ class CoupledNewton:
             A += s._maybe_compile(cf) * measure
         cf, measure = phase_field_piece(s, a, b)
         K += cf * measure
+        if K is A:
+            return A
         # a zero term on every element gives K the sparsity pattern of the tangent
         K += ngs.Variation(ngs.Parameter(0.0) * (ngs.InnerProduct(u, u) + a * a) * ngs.dx)
         return _QuadraticPlus(A, K, s._design_key)
@@ -248,7 +254,7 @@ class CoupledNewton:
         grad beta) over the fracture regions; of the solver's alpha, or of ``alpha_vec``."""
         a = self.s.alpha.vec.FV().NumPy() if alpha_vec is None else alpha_vec
         self._assemble_wf()
-        return 0.5 * float(a @ self._wf_matvec(a))
+        return 0.5 * self._wf_dot(a, self._wf_matvec(a))
 
     def _assemble_wf(self):
         key = self.s._design_key()
@@ -266,10 +272,18 @@ class CoupledNewton:
         self._wf_y = M.mat.CreateColVector()
 
     def _wf_matvec(self, a: np.ndarray) -> np.ndarray:
-        """M a: the gradient dD/dalpha (N mm per unit alpha, per thickness in 2D)."""
+        """M a: the gradient dD/dalpha (N mm per unit alpha, per thickness in 2D); on a distributed
+        mesh each rank's part of it (sum the products with :meth:`_wf_dot`)."""
+        if self.s.ranks.parallel:
+            self._wf_x.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
         self._wf_x.FV().NumPy()[:] = a
         self._wf_y.data = self._wf_form.mat * self._wf_x
         return self._wf_y.FV().NumPy().copy()
+
+    def _wf_dot(self, a: np.ndarray, grad: np.ndarray) -> float:
+        """a . grad for an alpha-like array ``a`` (the same on every rank that shares a dof) and a
+        product ``grad`` of :meth:`_wf_matvec` (summed over the ranks)."""
+        return self.s.ranks.sum(float(a @ grad))
 
     def fracture_mean(self, cf) -> float:
         """Mean of the coefficient ``cf`` over the fracture regions (area or volume weighted)."""
@@ -314,6 +328,7 @@ class CoupledNewton:
         s = self.s
         tm = s.timings
         nu = self.nu
+        ranks = s.ranks
         s._r_valid = False
         s.H.vec.FV().NumPy()[:] = s.H_committed
         self._gather()
@@ -338,24 +353,31 @@ class CoupledNewton:
             xN[:nu][dir_u] = s.dirichlet_target(lam)[dir_u]
         target = s.dirichlet_target(lam)
         free_u = ~dir_u & self._free_base[:nu]
+        # masks of the u dofs in the coupled vector (free ones; Dirichlet ones)
+        free_ux = np.zeros(xN.size, dtype=bool)
+        free_ux[:nu] = free_u
+        dir_ux = np.zeros(xN.size, dtype=bool)
+        dir_ux[:nu] = dir_u
         solve_time = assembly_time = 0.0
         r_ref = 0.0
         tol_a = self.alpha_tol * self.alpha_residual_scale
         res_u = math.inf
 
-        def split(xv, rv):
-            """Residual norms (u part on the free dofs; alpha part of the median NCP function,
-            in units of the residual) and the bound each alpha dof is held at (0 none, -1 lower,
-            +1 upper)."""
+        def split(xv, rvec):
+            """Residual norms of the residual vector ``rvec`` at the coupled iterate ``xv`` (u part
+            on the free dofs; alpha part of the median NCP function, in units of the residual) and
+            the bound each alpha dof is held at (0 none, -1 lower, +1 upper)."""
+            rvec = ranks.cumulated(rvec, self._rc)
+            rv = rvec.FV().NumPy()
             a, ra = xv[nu:], rv[nu:]
             lo, up = a - a_low, a - a_up
             phi = np.median(np.stack([lo, up, c * ra]), axis=0)
             held = np.where(phi == lo, -1, np.where(phi == up, 1, 0))
             held[(held != 0) & (phi == c * ra)] = 0
-            return float(np.linalg.norm(rv[:nu][free_u])), float(np.linalg.norm(phi / c)), held
+            return ranks.masked_norm(rvec, free_ux), ranks.norm_of(phi / c, rvec, nu), held
 
         def constraint(xv):
-            return 0.5 * float(xv[nu:] @ self._wf_matvec(xv[nu:])) - d_target if path else 0.0
+            return 0.5 * self._wf_dot(xv[nu:], self._wf_matvec(xv[nu:])) - d_target if path else 0.0
 
         def merit_of(ru, ra, gv, scale_u):
             """The line search's merit: each residual relative to its natural scale (units differ:
@@ -378,7 +400,7 @@ class CoupledNewton:
             self._scatter()
             s.load = lam
             self.load_solved = lam
-            self.cap_binding = bool(np.any((held == 1) & (a_up < 1.0 - 1e-12)))
+            self.cap_binding = ranks.any(bool(np.any((held == 1) & (a_up < 1.0 - 1e-12))))
             return NewtonResult(True, iterations + relaxed["iterations"], res_u, solve_time, assembly_time, 0)
 
         def relax_u():
@@ -414,6 +436,8 @@ class CoupledNewton:
         def direction(lin, free, fixed_step, a_cur, g):
             """Newton (or Levenberg) direction (dx, dlambda) from the factorization ``lin``; None
             when the damage does not respond to the load (path following)."""
+            if ranks.parallel:
+                w.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
             wN = w.FV().NumPy()
             wN[:] = fixed_step
             tmp.data = r + self.form.mat * w
@@ -424,6 +448,8 @@ class CoupledNewton:
                 # response to a unit load change: the boundary values move by d target / d lambda
                 h = 1e-6 * max(abs(lam), 1e-3)
                 dt_dl = (s.dirichlet_target(lam + h) - s.dirichlet_target(lam - h)) / (2 * h)
+                if ranks.parallel:
+                    w.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
                 wN[:] = 0.0
                 wN[:nu] = np.where(dir_u, dt_dl, 0.0)
                 unit = wN.copy()
@@ -431,11 +457,11 @@ class CoupledNewton:
                 lin(tmp, w)
                 bN = np.where(free, -w.FV().NumPy(), unit)
                 grad = self._wf_matvec(a_cur)
-                slope = float(grad @ bN[nu:])
+                slope = ranks.sum(float(grad @ bN[nu:]))
                 if not abs(slope) > 0.0:
                     self.load_unresponsive = True
                     return None
-                dlam = -(g + float(grad @ dxN[nu:])) / slope
+                dlam = -(g + ranks.sum(float(grad @ dxN[nu:]))) / slope
                 if max_load_step is not None and not abs(dlam) <= max_load_step:
                     if _DEBUG:
                         print(f"    load step {dlam:.3e} mm beyond {max_load_step:.3e} mm", flush=True)
@@ -483,11 +509,10 @@ class CoupledNewton:
                     s.u.vec.FV().NumPy()[:] = xN[:nu]
                     if s.min_J() > 0.0:
                         self.form.Apply(x, tmp)
-                        tN = tmp.FV().NumPy()
-                        if np.all(np.isfinite(tN)):
+                        if ranks.all(bool(np.all(np.isfinite(tmp.FV().NumPy())))):
                             if lifted:
                                 return True, lam_t, step, math.nan
-                            rmu, rma, _ = split(xN, tN)
+                            rmu, rma, _ = split(xN, tmp)
                             m = merit_of(rmu, rma, constraint(xN), scale_u)
                             if m <= (1.0 - 1e-4 * step) * merit0:
                                 if _DEBUG:
@@ -513,13 +538,13 @@ class CoupledNewton:
             else:
                 self.form.Apply(x, r)
             tm["residual"] += time.perf_counter() - t0
-            if not np.all(np.isfinite(rN)):
+            if not ranks.all(bool(np.all(np.isfinite(rN)))):
                 return failed(it, "residual is not finite")
             rem = np.where(dir_u, target - xN[:nu], 0.0)
-            lifted = (not path) and bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(lam))))
-            res_u, res_a, held = split(xN, rN)
+            lifted = (not path) and ranks.any(bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(lam)))))
+            res_u, res_a, held = split(xN, r)
             g = constraint(xN)
-            reac = float(np.linalg.norm(rN[:nu][dir_u]))
+            reac = ranks.masked_norm(ranks.cumulated(r, self._rc), dir_ux)
             if _DEBUG:
                 print(f"    gmres {self.lin.gmres_iterations[-2:]}", flush=True)
                 print(f"    coupled it {it} lam {lam:.8g} res_u {res_u:.3e} (ref {max(reac, r_ref):.3e}) res_a {res_a:.3e} "
@@ -552,7 +577,7 @@ class CoupledNewton:
             # estimate of the dof's Newton step (with c from the (Gc/l0) mass only, the notch tip,
             # where 2 H >> Gc/l0, was put on alpha = 1 and released again, step after step)
             c = self._ncp_scale = self.lin.diagonal_scale()
-            res_u, res_a, held = split(xN, rN)
+            res_u, res_a, held = split(xN, r)
             merit0 = merit_of(res_u, res_a, g, scale_u)
             free = self._free_base.copy()
             free[nu:] &= held == 0

@@ -19,7 +19,8 @@ What the solver must reduce (measured with NGSolve 6.2.2608, MPICH 5.0.2; each p
 :class:`Ranks` is the one place these reductions live; on a serial mesh each of them is the
 plain numpy expression the serial code has always used, so serial results do not change.
 
-Supported so far: the single-pass and staggered schemes, displacement loads on boundaries,
+Supported so far: every scheme (the coupled Newton's systems gathered on rank 0 as well,
+:mod:`ngtmc.coupled_linear`), displacement loads on boundaries,
 supports, densities given per region, no adaptive refinement, no run folder from ``simulate``
 (``out_dir``); the runner writes one from rank 0 (``ngtmc run --mpi``, ``run_study(mpi=True)``:
 history, metadata and report, without snapshots or checkpoints). :func:`check_supported` refuses
@@ -103,6 +104,28 @@ class Ranks:
         w.FV().NumPy()[:] = weights
         return float(ngs.InnerProduct(vec, w))
 
+    def norm_of(self, values: np.ndarray, like, start: int = 0) -> float:
+        """Euclidean norm of a rank's numpy array whose shared entries agree on every rank, the
+        entries of the dofs ``start`` .. ``start + len(values)`` of vectors like ``like`` (an NGSolve
+        vector), each shared dof counted once."""
+        if not self.parallel:
+            return float(np.linalg.norm(values))
+        w = like.CreateVector()
+        w.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
+        wN = w.FV().NumPy()
+        wN[:] = 0.0
+        wN[start:start + len(values)] = values
+        return float(w.Norm())
+
+    def cumulated(self, vec, out):
+        """``vec`` with each shared dof's full value on every rank (a residual's parts summed):
+        ``out`` holds it on a distributed mesh; on a serial one ``vec`` itself is returned."""
+        if not self.parallel:
+            return vec
+        out.data = vec
+        out.Cumulate()
+        return out
+
     def count(self, mask: np.ndarray, like) -> int:
         """Number of dofs where a consistent mask (the same on every rank that shares a dof) is
         True, each shared dof counted once (``like``: an NGSolve vector of the space)."""
@@ -147,8 +170,6 @@ def _unsupported(scene, scheme="single-pass", adapt=None, out_dir=None) -> list:
     from collections.abc import Mapping
     from .conditions import DisplacementField, Point, Traction
     what = []
-    if scheme not in ("single-pass", "staggered"):
-        what.append(f"scheme={scheme!r} (the coupled Newton works on the whole matrix; use 'single-pass' or 'staggered')")
     if adapt is not None:
         what.append("adaptive refinement (adapt=)")
     if out_dir is not None:

@@ -301,8 +301,9 @@ class DissipationPath:
         (on the segment from ``t0`` to ``t1``); if not, ``r.message`` says why."""
         if not r.converged:
             return False
-        H_trial = self.sim.solver.trial_history()
-        if not np.all(np.isfinite(H_trial)):
+        s = self.sim.solver
+        H_trial = s.trial_history()
+        if not s.ranks.all(bool(np.all(np.isfinite(H_trial)))):
             r.message = "history not finite (J <= 0 at a history point)"
             return False
         info["H_trial"] = H_trial
@@ -389,7 +390,7 @@ class DissipationPath:
         for damping in SECANT_DAMPING:
             uN[:] = u_n + damping * ratio * (u_n - u_p)
             uN[dirm] = target
-            if np.all(np.isfinite(uN)) and s.min_J() > 0.0:
+            if s.ranks.all(bool(np.all(np.isfinite(uN)))) and s.min_J() > 0.0:
                 break
         else:
             uN[:] = keep_u

@@ -173,7 +173,7 @@ class StepSchemes:
         if res.converged:
             s._r_valid = False
             H_trial = s.trial_history()
-            if np.all(np.isfinite(H_trial)):
+            if s.ranks.all(bool(np.all(np.isfinite(H_trial)))):
                 info["H_trial"] = H_trial
                 return True, info
             res.message = "history not finite (J <= 0 at a history point)"
