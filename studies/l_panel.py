@@ -105,8 +105,11 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   crack arrests (6.284 mm, 10.3 kN): the bordered Newton step of a dissipation step asked for a
   load change of 5e11 mm, since the damage no longer responds to the load, and inverted
   elements at every line-search length; the last attempt of such a step is now a displacement
-  step (``ngtmc.path.LOAD_STEP_LIMIT``). Both cases take about twice the steps of 2026-11-25;
-  which change since then costs them is not measured.
+  step (``ngtmc.path.LOAD_STEP_LIMIT``). Both cases take about twice the steps of 2026-11-25:
+  the cause is the ceiling on the growth of the dissipation step after a cut-back (commit
+  32c1e15: 155 -> 283 steps, 677 -> 1048 iterations, the same peak), which holds the crack run's
+  steps small; switched off on today's code, the run stalls at 6.2986 mm instead
+  (docs/performance.md, "Which change doubled the quick L-panel's steps").
 * At u = l_h the force is 4.8 kN on first loading (not "about zero": the third medium between the
   curved indenter and the arm is squeezed over some 20 mm and carries load from about 5.8 mm on;
   approach-only runs gave F(6.0) = 5.4 kN with 2.5 mm void elements and 4.8 kN with 0.5 mm ones at
