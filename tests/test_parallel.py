@@ -37,8 +37,12 @@ def serial(tmp_path_factory):
 
 
 def _strip_times(x):
+    """``x`` without the measurements of the process that ran it: times, and the peak memory (the
+    largest resident set of that process so far, which depends on what else it ran: a case run
+    in the test process counts every earlier test of it)."""
     if isinstance(x, dict):
-        return {k: _strip_times(v) for k, v in x.items() if not (k.endswith("time_s") or k == "time_split_s")}
+        return {k: _strip_times(v) for k, v in x.items()
+                if not (k.endswith("time_s") or k in ("time_split_s", "peak_memory_mb"))}
     if isinstance(x, list):
         return [_strip_times(v) for v in x]
     return x
