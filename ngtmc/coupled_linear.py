@@ -31,6 +31,13 @@ __all__ = ["CoupledLinearSolver", "LINEAR_SOLVERS"]
 #: factor reuses its symbolic step), "umfpack" or "pardiso" (direct, whole matrix).
 LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
 
+#: A block-GMRES solution is checked against the matrix: where its true residual on the free dofs
+#: exceeds GMRES_TRUE_RTOL times the right-hand side, the factorization's solves fall back to
+#: UMFPACK. GMRES stops on the preconditioned residual, and where elements are almost broken the
+#: block preconditioner is so poor that a solution "converged" to 1e-8 in 5 iterations had a true
+#: residual larger than the right-hand side (the MPI test scene's stall, docs/performance.md).
+GMRES_TRUE_RTOL = 1e-4
+
 
 class CoupledLinearSolver:
     """Factorizations of the assembled coupled tangent ``form.mat`` (u dofs first, ``nu`` of
@@ -58,6 +65,8 @@ class CoupledLinearSolver:
         self.gmres_rtol = float(gmres_rtol)
         self.gmres_maxsteps = int(gmres_maxsteps)
         self.gmres_iterations: list[int] = []
+        #: block-GMRES solves whose true residual failed GMRES_TRUE_RTOL (then solved by UMFPACK)
+        self.inexact_solves = 0
         self._inv_u = None
         self._diag = None  # (positions in the matrix values, rows) of the diagonal entries
 
@@ -147,7 +156,9 @@ class CoupledLinearSolver:
         symbolic step). GMRES stops when the preconditioned residual fell by ``gmres_rtol``
         (relative: ngsolve's ``GMRes(tol=)`` is an absolute tolerance, which left the Newton
         corrections of a nearly converged step inexact, see tests/test_traps.py). Falls back to
-        UMFPACK when GMRES does not converge in ``gmres_maxsteps``.
+        UMFPACK when GMRES does not converge in ``gmres_maxsteps``, or when its solution's true
+        residual exceeds GMRES_TRUE_RTOL of the right-hand side (counted in
+        :attr:`inexact_solves`).
 
         ``diagonal_shift`` (per dof, Levenberg): the matrix's values hold the shifted diagonal
         while the factors are made (:meth:`shifted`); the solves apply the restored matrix plus
@@ -167,6 +178,7 @@ class CoupledLinearSolver:
         op = _Masked(A, free, diagonal_shift)
         pre = _BlockLower(A, self._inv_u, inv_a)
         direct = []
+        check = A.CreateColVector()
 
         def direct_inverse():
             """UMFPACK of the matrix (with the diagonal shift)."""
@@ -183,7 +195,13 @@ class CoupledLinearSolver:
                              printrates=False)
             sol = gm.Solve(rhs=rhs)
             self.gmres_iterations.append(gm.iterations)
-            if gm.iterations >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy())):
+            bad = gm.iterations >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy()))
+            if not bad:
+                check.data = op * sol
+                check.data -= rhs
+                bad = check.Norm() > GMRES_TRUE_RTOL * rhs.Norm()
+                self.inexact_solves += int(bad)
+            if bad:
                 direct.append(direct_inverse())
                 sol.data = direct[0] * rhs
             out.data = sol

@@ -204,3 +204,35 @@ def test_levenberg_solve_of_block_gmres_is_that_of_the_shifted_matrix(mu):
     p, q = x_plain.FV().NumPy()[free], x_plain_um.FV().NumPy()[free]
     assert np.linalg.norm(p - q) <= 1e-8 * np.linalg.norm(q)
     assert np.linalg.norm(a - p) > 1e-6 * np.linalg.norm(p)
+
+
+def test_block_gmres_solution_failing_its_true_residual_is_solved_by_umfpack(monkeypatch):
+    """A block-GMRES solution is checked against the matrix (GMRES stops on its preconditioned
+    residual): one whose true residual exceeds GMRES_TRUE_RTOL of the right-hand side is replaced
+    by the UMFPACK solution, and counted. With the threshold at 0 every solve fails the check; at
+    its value none does on this state."""
+    import ngtmc.coupled_linear as cl
+    s, c = _damaged_state(seed=3)
+    c.form.AssembleLinearization(c.x.vec)
+    free = c._free_base.copy()
+    free[:c.nu] &= ~s._dir_np
+    rhs = c.x.vec.CreateVector()
+    rhs.FV().NumPy()[:] = np.random.default_rng(7).standard_normal(rhs.size)
+    rhs.FV().NumPy()[~free] = 0.0
+    x_um = rhs.CreateVector()
+    cl.CoupledLinearSolver(c.form, c.nu, "umfpack").factorize(free)(rhs, x_um)
+    b = x_um.FV().NumPy()[free]
+    gm = cl.CoupledLinearSolver(c.form, c.nu, "block-gmres", gmres_rtol=1e-10)
+    x = rhs.CreateVector()
+    gm.factorize(free)(rhs, x)
+    gmres_error = np.linalg.norm(x.FV().NumPy()[free] - b) / np.linalg.norm(b)
+    assert gm.inexact_solves == 0 and 0 < gmres_error <= 1e-7
+    monkeypatch.setattr(cl, "GMRES_TRUE_RTOL", 0.0)
+    gm.factorize(free)(rhs, x)
+    assert gm.inexact_solves == 1
+    assert np.linalg.norm(x.FV().NumPy()[free] - b) <= 1e-12 * np.linalg.norm(b)
+    # a GMRES stopped early (preconditioned residual down by 1e-2 only) fails the check at its value
+    monkeypatch.setattr(cl, "GMRES_TRUE_RTOL", 1e-4)
+    loose = cl.CoupledLinearSolver(c.form, c.nu, "block-gmres", gmres_rtol=1e-2)
+    loose.factorize(free)(rhs, x)
+    assert loose.inexact_solves == 1 and np.linalg.norm(x.FV().NumPy()[free] - b) <= 1e-12 * np.linalg.norm(b)
