@@ -64,9 +64,9 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="ngtmc-mpi-run-") as tmp:
         out = Path(tmp) / "serial"
         runs["serial"] = _one([*base, "--no-vtk", "--threads", "1", "-o", str(out)], out)
+        launcher = _launcher()
         for n in args.ranks:
             out = Path(tmp) / f"ranks{n}"
-            launcher = _launcher()
             runs[f"{n} ranks"] = _one([launcher, "-n", str(n), sys.executable, "-m", "mpi4py", *base[1:], "--mpi",
                                        "-o", str(out)], out)
     ref = runs["serial"]["history"]

@@ -185,6 +185,8 @@ class CoupledNewton:
         self._rc = self.x.vec.CreateVector()  # MPI: a residual with its ranks' parts summed
         self._dx = self.x.vec.CreateVector()
         self._w = self.x.vec.CreateVector()
+        if s.ranks.parallel:  # filled from numpy with values that agree on every rank
+            self._w.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
         self._tmp = self.x.vec.CreateVector()
         self._x0 = self.x.vec.CreateVector()
         # scale of the alpha residual: (Gc / l0) times the lumped mass, for alpha of order one
@@ -269,13 +271,13 @@ class CoupledNewton:
         self._wf_form = M
         self._wf_key = key
         self._wf_x = M.mat.CreateColVector()
+        if s.ranks.parallel:  # filled from numpy with alpha values that agree on every rank
+            self._wf_x.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
         self._wf_y = M.mat.CreateColVector()
 
     def _wf_matvec(self, a: np.ndarray) -> np.ndarray:
         """M a: the gradient dD/dalpha (N mm per unit alpha, per thickness in 2D); on a distributed
         mesh each rank's part of it (sum the products with :meth:`_wf_dot`)."""
-        if self.s.ranks.parallel:
-            self._wf_x.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
         self._wf_x.FV().NumPy()[:] = a
         self._wf_y.data = self._wf_form.mat * self._wf_x
         return self._wf_y.FV().NumPy().copy()
@@ -436,8 +438,6 @@ class CoupledNewton:
         def direction(lin, free, fixed_step, a_cur, g):
             """Newton (or Levenberg) direction (dx, dlambda) from the factorization ``lin``; None
             when the damage does not respond to the load (path following)."""
-            if ranks.parallel:
-                w.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
             wN = w.FV().NumPy()
             wN[:] = fixed_step
             tmp.data = r + self.form.mat * w
@@ -448,8 +448,6 @@ class CoupledNewton:
                 # response to a unit load change: the boundary values move by d target / d lambda
                 h = 1e-6 * max(abs(lam), 1e-3)
                 dt_dl = (s.dirichlet_target(lam + h) - s.dirichlet_target(lam - h)) / (2 * h)
-                if ranks.parallel:
-                    w.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
                 wN[:] = 0.0
                 wN[:nu] = np.where(dir_u, dt_dl, 0.0)
                 unit = wN.copy()
@@ -509,7 +507,7 @@ class CoupledNewton:
                     s.u.vec.FV().NumPy()[:] = xN[:nu]
                     if s.min_J() > 0.0:
                         self.form.Apply(x, tmp)
-                        if ranks.all(bool(np.all(np.isfinite(tmp.FV().NumPy())))):
+                        if ranks.all_finite(tmp.FV().NumPy()):
                             if lifted:
                                 return True, lam_t, step, math.nan
                             rmu, rma, _ = split(xN, tmp)
@@ -538,13 +536,14 @@ class CoupledNewton:
             else:
                 self.form.Apply(x, r)
             tm["residual"] += time.perf_counter() - t0
-            if not ranks.all(bool(np.all(np.isfinite(rN)))):
+            if not ranks.all_finite(rN):
                 return failed(it, "residual is not finite")
             rem = np.where(dir_u, target - xN[:nu], 0.0)
             lifted = (not path) and ranks.any(bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(lam)))))
-            res_u, res_a, held = split(xN, r)
+            rc = ranks.cumulated(r, self._rc)
+            res_u, res_a, held = split(xN, rc)
             g = constraint(xN)
-            reac = ranks.masked_norm(ranks.cumulated(r, self._rc), dir_ux)
+            reac = ranks.masked_norm(rc, dir_ux)
             if _DEBUG:
                 print(f"    gmres {self.lin.gmres_iterations[-2:]}", flush=True)
                 print(f"    coupled it {it} lam {lam:.8g} res_u {res_u:.3e} (ref {max(reac, r_ref):.3e}) res_a {res_a:.3e} "
@@ -577,7 +576,7 @@ class CoupledNewton:
             # estimate of the dof's Newton step (with c from the (Gc/l0) mass only, the notch tip,
             # where 2 H >> Gc/l0, was put on alpha = 1 and released again, step after step)
             c = self._ncp_scale = self.lin.diagonal_scale()
-            res_u, res_a, held = split(xN, r)
+            res_u, res_a, held = split(xN, rc)
             merit0 = merit_of(res_u, res_a, g, scale_u)
             free = self._free_base.copy()
             free[nu:] &= held == 0

@@ -76,6 +76,10 @@ class Ranks:
         """True when ``flag`` is true on every rank."""
         return self.comm.Min(1.0 if flag else 0.0) > 0.5 if self.parallel else bool(flag)
 
+    def all_finite(self, values) -> bool:
+        """True when every entry of a rank's array is finite, on every rank."""
+        return self.all(bool(np.all(np.isfinite(values))))
+
     # ------------------------------------------------------------------ vectors
     def masked_norm(self, vec, mask: np.ndarray) -> float:
         """Euclidean norm of an NGSolve vector over the dofs where ``mask`` (a rank's numpy bool
@@ -119,8 +123,9 @@ class Ranks:
 
     def cumulated(self, vec, out):
         """``vec`` with each shared dof's full value on every rank (a residual's parts summed):
-        ``out`` holds it on a distributed mesh; on a serial one ``vec`` itself is returned."""
-        if not self.parallel:
+        ``out`` holds it on a distributed mesh; on a serial one, or when ``vec`` is cumulated
+        already, ``vec`` itself is returned."""
+        if not self.parallel or vec.GetParallelStatus() == ngs.PARALLEL_STATUS.CUMULATED:
             return vec
         out.data = vec
         out.Cumulate()
@@ -153,11 +158,11 @@ class Ranks:
         return self._work
 
 
-def check_supported(scene, scheme: str = "single-pass", adapt=None, out_dir=None):
+def check_supported(scene, adapt=None, out_dir=None):
     """Raise NotImplementedError for what a distributed scene cannot do yet (module docstring);
     nothing for a serial scene."""
     if is_distributed(scene.mesh):
-        _refuse(_unsupported(scene, scheme, adapt, out_dir))
+        _refuse(_unsupported(scene, adapt, out_dir))
 
 
 def _refuse(what: list):
@@ -166,7 +171,7 @@ def _refuse(what: list):
                                   + " (docs/parallel.md)")
 
 
-def _unsupported(scene, scheme="single-pass", adapt=None, out_dir=None) -> list:
+def _unsupported(scene, adapt=None, out_dir=None) -> list:
     from collections.abc import Mapping
     from .conditions import DisplacementField, Point, Traction
     what = []

@@ -303,7 +303,7 @@ class DissipationPath:
             return False
         s = self.sim.solver
         H_trial = s.trial_history()
-        if not s.ranks.all(bool(np.all(np.isfinite(H_trial)))):
+        if not s.ranks.all_finite(H_trial):
             r.message = "history not finite (J <= 0 at a history point)"
             return False
         info["H_trial"] = H_trial
@@ -390,7 +390,7 @@ class DissipationPath:
         for damping in SECANT_DAMPING:
             uN[:] = u_n + damping * ratio * (u_n - u_p)
             uN[dirm] = target
-            if s.ranks.all(bool(np.all(np.isfinite(uN)))) and s.min_J() > 0.0:
+            if s.ranks.all_finite(uN) and s.min_J() > 0.0:
                 break
         else:
             uN[:] = keep_u

@@ -141,7 +141,7 @@ class StepSchemes:
             if s.alpha is None:
                 break  # nothing may break: no history to keep
             H_trial = s.trial_history()
-            if not s.ranks.all(bool(np.all(np.isfinite(H_trial)))):
+            if not s.ranks.all_finite(H_trial):
                 return fail("history not finite (J <= 0 at a history point)")
             if max_passes == 1:
                 break
@@ -173,7 +173,7 @@ class StepSchemes:
         if res.converged:
             s._r_valid = False
             H_trial = s.trial_history()
-            if s.ranks.all(bool(np.all(np.isfinite(H_trial)))):
+            if s.ranks.all_finite(H_trial):
                 info["H_trial"] = H_trial
                 return True, info
             res.message = "history not finite (J <= 0 at a history point)"

@@ -135,7 +135,7 @@ class Simulation(StepSchemes):
             control = AdaptiveStepControl(du_max=abs(schedule.points[1]) / 20.0, du_min=abs(schedule.points[1]) * 1e-9)
         self._check_scheme(scheme, staggered_tol)
         from .distributed import check_supported
-        check_supported(scene, scheme, adapt)
+        check_supported(scene, adapt)
         if adapt is not None:
             from .adapt import Adaptivity, private_scene
             if not isinstance(adapt, Adaptivity):

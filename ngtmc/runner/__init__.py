@@ -156,7 +156,7 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         (``mpiexec -n 3 python -m mpi4py -m ngtmc run ... --mpi``; :mod:`ngtmc.distributed`, the
         extra ``mpi``). Every rank calls this; rank 0 writes the run folder and the report
         (history and metadata; no field snapshots, no ParaView series and no checkpoints, so no
-        resume). The schemes and conditions :func:`ngtmc.distributed.check_supported` refuses are
+        resume). The conditions :func:`ngtmc.distributed.check_supported` refuses are
         refused before anything is solved. See docs/parallel.md.
 
     Raises StepFailure (after writing the history and metadata with status "failed") when a step

@@ -121,8 +121,7 @@ class _Run(RunFolder):
                 scene.check()
                 if self.comm is not None:  # what the distributed scene will refuse, refused before anything runs
                     from ..distributed import _refuse, _unsupported
-                    _refuse(_unsupported(scene, (case.options or {}).get("scheme", "single-pass"),
-                                         (case.options or {}).get("adapt")))
+                    _refuse(_unsupported(scene, (case.options or {}).get("adapt")))
             except (ValueError, TypeError, NotImplementedError) as e:
                 raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
 
@@ -187,7 +186,7 @@ class _Run(RunFolder):
                           f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
-        # on MPI ranks the fields are the ranks' own: no snapshots (and no checkpoints, below)
+        # on MPI ranks the fields are the ranks' own: no snapshots (and no checkpoints: save_checkpoint)
         snaps = Snapshots(case, sim.solver, vtk_dir) if self.comm is None else _NoSnapshots()
         if ck is not None:
             sim.set_state(ck["state"])
@@ -202,8 +201,7 @@ class _Run(RunFolder):
         def save(state):
             self.snaps[case.name] = snaps.arrays(case.name)
             cm["cpu_time_s"] = time.process_time() - cpu0
-            if self.comm is None:
-                self.save_checkpoint(case, state, snaps, done=False)
+            self.save_checkpoint(case, state, snaps, done=False)
             self.write_all()
 
         checkpoints = CheckpointOutput(sim, save, self.checkpoint_every, self.checkpoint_seconds)
@@ -232,8 +230,7 @@ class _Run(RunFolder):
                 res["error"] = error
             self.results[case.name] = res
             self.snaps[case.name] = snaps.arrays(case.name)
-            if self.comm is None:
-                self.save_checkpoint(case, state, snaps, done=(status == "completed"))
+            self.save_checkpoint(case, state, snaps, done=(status == "completed"))
 
         try:
             for row in sim.steps():       # the accepted steps, each through the case's plugins

@@ -120,6 +120,7 @@ class RunFolder:
         self.status = "running"
         self.error = None
         self.parallel: dict | None = None     # how the cases were spread over a Dask cluster, if they were
+        self.comm = None                      # the MPI communicator of a run on ranks (run_study(mpi=True))
         self.t0 = time.perf_counter()
         self.wall_before = 0.0
         self.created = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
@@ -190,9 +191,8 @@ class RunFolder:
             meta["features"] = dict(self.features)
         if self.parallel:
             meta["parallel"] = dict(self.parallel)
-        comm = getattr(self, "comm", None)
-        if comm is not None:
-            meta["mpi"] = {"ranks": int(comm.size)}
+        if self.comm is not None:
+            meta["mpi"] = {"ranks": int(self.comm.size)}
         if self.error:
             meta["error"] = self.error
         return meta
@@ -218,6 +218,10 @@ class RunFolder:
 
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, case: Case, state: dict, snaps: Snapshots | None, done: bool):
+        """Write ``case``'s checkpoint (``checkpoint/<case>.npz``); nothing on MPI ranks, whose
+        state is spread over the ranks (so an MPI run cannot be resumed)."""
+        if self.comm is not None:
+            return
         arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(jsonable(state["rows"]))),
                   "results": np.array(json.dumps(jsonable(self.results.get(case.name, {})))),
                   "case_meta": np.array(json.dumps(jsonable(self.case_meta.get(case.name, {})))),
