@@ -135,10 +135,12 @@ class SnapshotOutput(Plugin):
 
 class CheckpointOutput(Plugin):
     """Keeps the state of the last accepted step, and every ``every`` steps or ``seconds`` seconds
-    calls ``save(state)`` (a checkpoint and the run's files)."""
+    calls ``save(state)`` (a checkpoint and the run's files); on the MPI ranks of ``comm``, at the
+    steps where rank 0's clock says so."""
 
-    def __init__(self, sim, save: Callable[[dict], None], every: int, seconds: float):
+    def __init__(self, sim, save: Callable[[dict], None], every: int, seconds: float, comm=None):
         self.save = save
+        self.comm = comm  # MPI ranks save together, when rank 0 says so
         self.every = int(every)
         self.seconds = float(seconds)
         self.state = sim.get_state()
@@ -148,7 +150,10 @@ class CheckpointOutput(Plugin):
     def step(self, sim, row: dict):
         self.state = sim.get_state()
         now = time.perf_counter()
-        if sim.step - self.at_step >= self.every or now - self.at_time >= self.seconds:
+        due = sim.step - self.at_step >= self.every or now - self.at_time >= self.seconds
+        if self.comm is not None:
+            due = self.comm.bcast(due, root=0)
+        if due:
             self.save(self.state)
             self.at_step, self.at_time = sim.step, time.perf_counter()
 

@@ -191,7 +191,8 @@ def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
     and report; the history is the serial run's (same steps and iteration counts, values within
     1e-9 of their scale) through contact, the peak and the crack; the mesh is counted once; no
     checkpoint and no snapshots are written (the fields are the ranks' own), and the report says
-    why it shows no fields. The other ranks print nothing and leave no scratch folder."""
+    why it shows no fields. Each rank writes its own checkpoint. The other ranks print nothing and
+    leave no scratch folder."""
     import json
     serial, par, proc, _, left = run_folders
     a = _same_history(serial, par)
@@ -201,7 +202,9 @@ def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
     assert mp["status"] == "completed" and mp["mpi"] == {"ranks": 3} and "mpi" not in ms
     for key in ("n_elements", "n_vertices", "ndof_u", "ndof_alpha", "h_min", "h_max", "displacement_order"):
         assert mp["mesh"][key] == ms["mesh"][key], key
-    assert not (par / "checkpoint").exists() and not (par / "snapshots.npz").exists()
+    names = {f.name for f in (par / "checkpoint").iterdir()}
+    assert {f"main.rank{r}of3.npz" for r in range(3)} <= names and "main.npz" not in names
+    assert not (par / "snapshots.npz").exists()
     assert "computed on 3 MPI ranks" in (par / "report.html").read_text()
     assert proc.stdout.count("report:") == 1
     assert not left
@@ -220,8 +223,8 @@ def test_path_following_on_three_ranks_reproduces_the_serial_history(path_follow
 
 def test_ngtmc_run_mpi_refuses_what_it_cannot_do(run_folders, tmp_path):
     """What MPI runs do not support (here adaptive refinement) is refused by every rank before
-    anything is solved (exit 2, one message, no run folder); without several ranks, or with resume,
-    run_study refuses at once."""
+    anything is solved (exit 2, one message, no run folder); without several ranks run_study
+    refuses at once."""
     _, _, _, launcher, _ = run_folders
     before = _scratch_folders()
     proc = _mpi_run(launcher, tmp_path / "amr", "--set", "h_crack=0.0125")
@@ -231,5 +234,53 @@ def test_ngtmc_run_mpi_refuses_what_it_cannot_do(run_folders, tmp_path):
     assert not (tmp_path / "amr" / "history.csv").exists()
     with pytest.raises(StudyError, match="only MPI rank"):
         ngtmc.run_study(str(STUDY), output=tmp_path / "one", mpi=True, report=False, progress=False)
-    with pytest.raises(StudyError, match="cannot resume"):
-        ngtmc.run_study(str(STUDY), output=tmp_path / "one", mpi=True, resume=True, progress=False)
+
+
+_STOP_DRIVER = """
+import sys
+import ngtmc
+
+def halt(sim, row):
+    if row["step"] == int(sys.argv[2]):
+        raise KeyboardInterrupt
+
+try:
+    ngtmc.run_study(sys.argv[3], output=sys.argv[1], mpi=True, progress=False, report=False, vtk=False,
+                    overrides=dict(a.split("=") for a in sys.argv[4:]), callbacks=[halt])
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+"""
+
+
+def test_an_interrupted_mpi_run_resumes_from_the_checkpoints_of_its_ranks(path_following_folders, tmp_path):
+    """Each rank checkpoints its own part of the fields (``checkpoint/<case>.rank<r>of<n>.npz``, at
+    the steps rank 0's clock chooses). Path following on 3 ranks, interrupted after step 13
+    (damage growing, max alpha 0.12), resumed with ``ngtmc run --mpi --resume``: the history of the
+    uninterrupted run on 3 ranks, step for step. A resume on 2 ranks, or serially, is refused
+    with the command that works."""
+    _, full = path_following_folders
+    launcher = _mpi_launcher()
+    driver = tmp_path / "stop.py"
+    driver.write_text(_STOP_DRIVER)
+    out = tmp_path / "run"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    sets = [f"{k}={v}" for k, v in PATH_FOLLOWING.items()]
+    proc = subprocess.run([launcher, "-n", "3", sys.executable, "-m", "mpi4py", str(driver), str(out), "13", str(STUDY),
+                           *sets], capture_output=True, text=True, timeout=600, env=env)
+    assert proc.returncode == 0 and proc.stdout.count("interrupted") == 3, proc.stderr[-3000:]
+    assert json.loads((out / "metadata.json").read_text())["status"] == "interrupted"
+    names = {f.name for f in (out / "checkpoint").iterdir()}
+    assert {f"main.rank{r}of3.npz" for r in range(3)} <= names and "main.npz" not in names
+    with pytest.raises(StudyError, match="written by 3 MPI ranks: resume it with mpiexec -n 3"):
+        ngtmc.run_study(str(STUDY), output=out, resume=True, report=False, progress=False)
+    two = subprocess.run([launcher, "-n", "2", sys.executable, "-m", "mpi4py", "-m", "ngtmc", "run", str(STUDY),
+                          "--mpi", "--resume", "-o", str(out)], capture_output=True, text=True, timeout=600, env=env)
+    assert two.returncode == 2 and "written by 3 MPI ranks" in two.stderr, two.stderr[-3000:]
+    resumed = _mpi_run(launcher, out, "--resume")
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    assert "resuming from step 13" in resumed.stderr
+    import pandas as pd
+    h = pd.read_csv(out / "history.csv")
+    assert h["max_alpha"].iloc[13] > 0.1
+    _same_history(full, out)
+    assert json.loads((out / "metadata.json").read_text())["status"] == "completed"

@@ -155,8 +155,9 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         Every case on one mesh distributed over the MPI ranks this process belongs to
         (``mpiexec -n 3 python -m mpi4py -m ngtmc run ... --mpi``; :mod:`ngtmc.distributed`, the
         extra ``mpi``). Every rank calls this; rank 0 writes the run folder and the report
-        (history and metadata; no field snapshots, no ParaView series and no checkpoints, so no
-        resume). The conditions :func:`ngtmc.distributed.check_supported` refuses are
+        (history and metadata; no field snapshots and no ParaView series), and every rank its
+        checkpoints, ``checkpoint/<case>.rank<r>of<n>.npz``, so ``resume=True`` continues on the
+        same number of ranks. The conditions :func:`ngtmc.distributed.check_supported` refuses are
         refused before anything is solved. See docs/parallel.md.
 
     Raises StepFailure (after writing the history and metadata with status "failed") when a step
@@ -168,12 +169,9 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
                     checkpoint_seconds, vtk, callbacks, workers=workers, scheduler=scheduler, mpi=mpi).out
 
 
-def _mpi_world(resume: bool, parallel: bool):
+def _mpi_world(parallel: bool):
     """COMM_WORLD for ``mpi=True``; StudyError where MPI cannot run this (checked on every rank
     alike, so that all of them stop)."""
-    if resume:
-        raise StudyError("mpi=True / --mpi cannot resume a run: an MPI run writes no checkpoints (its state "
-                         "is spread over the ranks)")
     if parallel:
         raise StudyError("mpi=True / --mpi runs one case at a time on all ranks: it does not combine with "
                          "workers / scheduler (--workers, --scheduler)")
@@ -195,7 +193,7 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
     """The work of :func:`run_study`; returns the finished run (its folder ``out``, and the
     Simulation of each case computed in this process in ``simulations``)."""
     parallel = workers is not None or scheduler is not None
-    comm = _mpi_world(resume, parallel) if mpi else None
+    comm = _mpi_world(parallel) if mpi else None
     root = comm is None or comm.rank == 0
     if not root:  # the other ranks compute, rank 0 reports and writes
         progress, report, vtk = False, False, False
@@ -237,8 +235,12 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
             status, note = effective_status(old) if old else ("unknown", None)
             raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
                              "another output, or resume=True / --resume to continue it")
-    with _rank_folder(out, comm) as out:
-        run = _Run(mod, res, p, out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk, comm=comm)
+    with _rank_folder(out, comm) as rank_out:
+        run = _Run(mod, res, p, rank_out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk,
+                   comm=comm)
+        if comm is not None:
+            run.use_rank_checkpoints(out / "checkpoint")
+        out = rank_out
         if resume:
             if meta is not None and meta.get("status") == "running":
                 run.progress.say(f"{out}: {effective_status(meta)[1] or 'recorded as running'}")

@@ -85,13 +85,14 @@ class _Run(RunFolder):
                                       "taken from history.csv and metadata.json")
 
     def _recorded_files(self):
+        run_folder = self.store.folder.parent  # also on the MPI ranks that write into a scratch folder
         try:
-            hist = pd.read_csv(self.out / "history.csv")
+            hist = pd.read_csv(run_folder / "history.csv")
         except Exception:
             hist = pd.DataFrame()
         snaps = {}
         try:
-            with np.load(self.out / "snapshots.npz", allow_pickle=False) as z:
+            with np.load(run_folder / "snapshots.npz", allow_pickle=False) as z:
                 snaps = {k: z[k] for k in z.files}
         except Exception:
             pass
@@ -186,8 +187,15 @@ class _Run(RunFolder):
                           f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
-        # on MPI ranks the fields are the ranks' own: no snapshots (and no checkpoints: save_checkpoint)
+        # on MPI ranks the fields are the ranks' own: no snapshots; each rank checkpoints its part
         snaps = Snapshots(case, sim.solver, vtk_dir) if self.comm is None else _NoSnapshots()
+        fingerprint = _rank_fingerprint(sim.solver) if self.comm is not None else None
+        if ck is not None and fingerprint is not None:
+            same = ck.get("mpi_fingerprint") is not None and np.array_equal(ck["mpi_fingerprint"], fingerprint)
+            if not all(self.comm.allgather(same)):
+                raise StudyError(f"cannot resume case {case.name!r}: its mesh is distributed over the MPI ranks "
+                                 "otherwise than when its checkpoints were written (another NGSolve, or another "
+                                 "mesh); start a new run")
         if ck is not None:
             sim.set_state(ck["state"])
             if ck["snap"]:
@@ -201,10 +209,10 @@ class _Run(RunFolder):
         def save(state):
             self.snaps[case.name] = snaps.arrays(case.name)
             cm["cpu_time_s"] = time.process_time() - cpu0
-            self.save_checkpoint(case, state, snaps, done=False)
+            self.save_checkpoint(case, state, snaps, done=False, fingerprint=fingerprint)
             self.write_all()
 
-        checkpoints = CheckpointOutput(sim, save, self.checkpoint_every, self.checkpoint_seconds)
+        checkpoints = CheckpointOutput(sim, save, self.checkpoint_every, self.checkpoint_seconds, comm=self.comm)
         plugins = [SnapshotOutput(snaps, float(sim.rows[-1]["load"])),
                    Progress(self.progress_setting, f"[ngtmc {self.mod.NAME}] case {k + 1}/{len(self.cases)} "
                             f"{case.name}:", sim.force_unit, case=case.name),
@@ -230,7 +238,7 @@ class _Run(RunFolder):
                 res["error"] = error
             self.results[case.name] = res
             self.snaps[case.name] = snaps.arrays(case.name)
-            self.save_checkpoint(case, state, snaps, done=(status == "completed"))
+            self.save_checkpoint(case, state, snaps, done=(status == "completed"), fingerprint=fingerprint)
 
         try:
             for row in sim.steps():       # the accepted steps, each through the case's plugins
@@ -317,3 +325,12 @@ def peak_memory_mb() -> float:
     import sys
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return float(rss) / (1024.0 ** 2 if sys.platform == "darwin" else 1024.0)
+
+
+def _rank_fingerprint(solver) -> np.ndarray:
+    """This MPI rank's part of the mesh, as a resume compares it: its element, vertex and dof
+    counts and the sums of its vertices' coordinates (mm)."""
+    mesh = solver.mesh
+    coords = np.asarray(mesh.ngmesh.Coordinates(), dtype=float).reshape(-1, mesh.dim)
+    return np.concatenate([[mesh.ne, mesh.nv, solver.fes_u.ndof, solver.fes_a.ndof if solver.fes_a is not None else 0],
+                           coords.sum(axis=0)])

@@ -14,12 +14,13 @@ from pathlib import Path
 import platform
 import sys
 import time
+import warnings
 
 import numpy as np
 import pandas as pd
 
 from ..plugins import force_unit
-from ..runfiles import (HISTORY_UNITS, CheckpointStore, jsonable, parameters_hash, peak, physics_hash,
+from ..runfiles import (HISTORY_UNITS, CheckpointStore, CheckpointWarning, jsonable, parameters_hash, peak, physics_hash,
                         run_description, write_atomic, write_json, write_npz)
 from ..scene import _names
 from ..snapshots import Snapshots
@@ -217,11 +218,16 @@ class RunFolder:
         self.write_metadata()
 
     # ------------------------------------------------------------ checkpoints
-    def save_checkpoint(self, case: Case, state: dict, snaps: Snapshots | None, done: bool):
-        """Write ``case``'s checkpoint (``checkpoint/<case>.npz``); nothing on MPI ranks, whose
-        state is spread over the ranks (so an MPI run cannot be resumed)."""
-        if self.comm is not None:
-            return
+    def use_rank_checkpoints(self, folder: Path):
+        """On MPI ranks (``self.comm``): every rank writes and reads its own checkpoints,
+        ``<folder>/<case>.rank<r>of<n>.npz`` (its part of the fields), in the run's folder also
+        on the ranks that write nothing else."""
+        self.store = CheckpointStore(folder, rank=(self.comm.rank, self.comm.size))
+
+    def save_checkpoint(self, case: Case, state: dict, snaps: Snapshots | None, done: bool,
+                        fingerprint: np.ndarray | None = None):
+        """Write ``case``'s checkpoint (``checkpoint/<case>.npz``; on MPI ranks each rank's own,
+        :meth:`use_rank_checkpoints`, with the ``fingerprint`` of its part of the mesh)."""
         arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(jsonable(state["rows"]))),
                   "results": np.array(json.dumps(jsonable(self.results.get(case.name, {})))),
                   "case_meta": np.array(json.dumps(jsonable(self.case_meta.get(case.name, {})))),
@@ -235,6 +241,8 @@ class RunFolder:
             # checkpoint does not depend on the layout of that state
             arrays["simulation"] = np.array(json.dumps(jsonable({k: v for k, v in state.items()
                                                                  if k not in ("solver", "rows", "arrays")})))
+        if fingerprint is not None:
+            arrays["mpi_fingerprint"] = np.asarray(fingerprint, dtype=float)
         if snaps is not None:
             for k, v in snaps.state().items():
                 arrays["snap__" + k] = v
@@ -257,15 +265,41 @@ class RunFolder:
                 ck["state"] = {"solver": solver, "t": float(sc[0]), "step": int(sc[1]), "last_delta_wf": float(sc[2]),
                                "wf_prev": float(sc[3]), "elapsed": float(sc[4]),
                                "control": json.loads(str(d["control"])), "rows": ck["rows"], "arrays": {}}
+        ck["mpi_fingerprint"] = d.get("mpi_fingerprint")
         ck["snap"] = {k[len("snap__"):]: v for k, v in d.items() if k.startswith("snap__")}
         ck["snaparr"] = {k[len("snaparr__"):]: v for k, v in d.items() if k.startswith("snaparr__")}
         return ck
 
     def load_checkpoint(self, case: Case) -> dict | None:
-        """The newest readable checkpoint of ``case`` (see CheckpointStore.load), or None. Raises
-        StudyError when it was computed with other parameters than this run."""
-        ck = self.store.load(case.name, self._decode_checkpoint)
+        """The newest readable checkpoint of ``case`` (see CheckpointStore.load), or None; on MPI
+        ranks the newest generation that every rank can read. Raises StudyError when it was
+        computed with other parameters than this run, or on another number of MPI ranks."""
+        other = self.store.other_layouts(case.name)
+        if other and not any(f.exists() for f in self.store.files(case.name)):
+            n = max(other)
+            how = ("a serial run: resume it without --mpi / mpi=True" if n == 0 else
+                   f"{n} MPI ranks: resume it with mpiexec -n {n} python -m mpi4py -m ngtmc run ... --mpi --resume")
+            raise StudyError(f"cannot resume {self.out}: the checkpoint of case {case.name!r} was written by {how}")
+        if self.comm is None:
+            ck = self.store.load(case.name, self._decode_checkpoint)
+        else:
+            ck = self._common_checkpoint(case)
         if ck is not None and ck["parameters_hash"] not in (None, self.hash):
             raise StudyError(f"cannot resume {self.out}: checkpoint of case {case.name!r} was computed with other "
                              f"parameters ({ck['parameters_hash']}) than this run ({self.hash}); start a new run")
         return ck
+
+    def _common_checkpoint(self, case: Case) -> dict | None:
+        """On MPI ranks: the newest generation of ``case``'s checkpoint that every rank has (a run
+        stopped while the ranks wrote theirs may have left one rank a generation ahead), else None
+        (with a warning: the case starts again)."""
+        cks = list(self.store.readable(case.name, self._decode_checkpoint))
+        keys = [(ck["done"], len(ck["rows"])) for ck in cks]
+        every = self.comm.allgather(keys)
+        common = [k for k in every[0] if all(k in other for other in every)]
+        if not common:
+            if any(every):
+                warnings.warn(f"case {case.name!r}: the MPI ranks have no checkpoint generation in common; the "
+                              "case starts again", CheckpointWarning, stacklevel=2)
+            return None
+        return cks[keys.index(common[0])]
