@@ -62,8 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="send the cases to the Dask scheduler at ADDRESS (e.g. tcp://host:8786) instead")
     r.add_argument("--mpi", action="store_true",
                    help="each case on one mesh distributed over the MPI ranks: mpiexec -n 3 python -m mpi4py "
-                        "-m ngtmc run NAME --mpi (needs pip install ngtmc[mpi]; rank 0 writes the run folder, "
-                        "without field snapshots, each rank its checkpoints; docs/parallel.md)")
+                        "-m ngtmc run NAME --mpi (needs pip install ngtmc[mpi]; rank 0 writes the run folder "
+                        "with the fields gathered, each rank its checkpoints; docs/parallel.md)")
     r.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
 
     sub.add_parser("list", help="list the studies with their resolutions")

@@ -35,7 +35,7 @@ import ngsolve as ngs
 from .materials import deformation_gradient, full_deformation_gradient
 from .solver import merged_terms
 
-__all__ = ["FIELDS", "DISPLACEMENT", "VtkWriter", "pvd_text", "write_pvd"]
+__all__ = ["FIELDS", "DISPLACEMENT", "VtkGeometry", "VtkWriter", "pvd_text", "vtu_bytes", "write_pvd", "write_vtu"]
 
 #: Name of the displacement array (the active vector of the point data).
 DISPLACEMENT = "displacement [mm]"
@@ -91,24 +91,7 @@ class VtkWriter:
         mesh = s.mesh
         self.nv = mesh.nv
         self.fracture = s.alpha is not None
-        pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)[:self.nv]
-        self.points = np.zeros((self.nv, 3))
-        self.points[:, :pts.shape[1]] = pts
-        cells = []
-        for el in mesh.Elements(ngs.VOL):
-            if el.type not in _VTK_TYPE:
-                raise ValueError(f"VTK output: element type {el.type} is not supported")
-            cells.append((el.type, [v.nr for v in el.vertices]))
-        self.types = np.asarray([_VTK_TYPE[t] for t, _ in cells], dtype=np.uint8)
-        for t, flip in _FLIP.items():  # VTK's orientation (netgen's tetrahedra are the other way round)
-            idx = [i for i, (ti, _) in enumerate(cells) if ti == t]
-            if idx:
-                nodes = np.asarray([cells[i][1] for i in idx], dtype=np.int64)
-                nodes = np.where(_negative(self.points, nodes, s.dim)[:, None], nodes[:, flip], nodes)
-                for i, row in zip(idx, nodes):
-                    cells[i] = (t, list(row))
-        self.connectivity = np.asarray([n for _, c in cells for n in c], dtype=np.int64)
-        self.offsets = np.cumsum([len(c) for _, c in cells], dtype=np.int64)
+        self.geometry = VtkGeometry(mesh)
 
         # element means: int_T f / int_T 1 with the rule the solver uses for f (L2 order 0: dof i = element i)
         l2 = ngs.L2(mesh, order=0)
@@ -167,28 +150,64 @@ class VtkWriter:
 
     def vtu_bytes(self) -> bytes:
         """The ``.vtu`` file of the current state."""
-        point, cell = self.point_data(), self.cell_data()
-        scalars = "alpha [-]" if self.fracture else None
-        pd_attr = f" Vectors={quoteattr(DISPLACEMENT)}" + (f" Scalars={quoteattr(scalars)}" if scalars else "")
-        lines = ['<?xml version="1.0"?>',
-                 '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
-                 "  <UnstructuredGrid>",
-                 f'    <Piece NumberOfPoints="{self.nv}" NumberOfCells="{len(self.types)}">',
-                 "      <Points>", _array("Points", self.points), "      </Points>",
-                 "      <Cells>", _array("connectivity", self.connectivity), _array("offsets", self.offsets),
-                 _array("types", self.types), "      </Cells>",
-                 f"      <PointData{pd_attr}>", *(_array(k, a) for k, a in point.items()), "      </PointData>",
-                 f"      <CellData Scalars={quoteattr('von Mises [MPa]')}>",
-                 *(_array(k, a) for k, a in cell.items()), "      </CellData>",
-                 "    </Piece>", "  </UnstructuredGrid>", "</VTKFile>", ""]
-        return "\n".join(lines).encode()
+        return vtu_bytes(self.geometry, self.point_data(), self.cell_data())
 
     def write(self, path) -> Path:
         """Write the current state to ``path`` (a ``.vtu`` file; through a temporary file)."""
-        from .runner import write_atomic
-        path = Path(path)
-        write_atomic(path, self.vtu_bytes())
-        return path
+        return write_vtu(path, self.vtu_bytes())
+
+
+class VtkGeometry:
+    """Points (nv, 3) in mm (z = 0 in 2D) and cells (VTK types, connectivity, offsets) of a mesh's
+    volume elements in VTK's orientation."""
+
+    def __init__(self, mesh):
+        self.nv = mesh.nv
+        pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)[:self.nv]
+        self.points = np.zeros((self.nv, 3))
+        self.points[:, :pts.shape[1]] = pts
+        cells = []
+        for el in mesh.Elements(ngs.VOL):
+            if el.type not in _VTK_TYPE:
+                raise ValueError(f"VTK output: element type {el.type} is not supported")
+            cells.append((el.type, [v.nr for v in el.vertices]))
+        self.types = np.asarray([_VTK_TYPE[t] for t, _ in cells], dtype=np.uint8)
+        for t, flip in _FLIP.items():  # VTK's orientation (netgen's tetrahedra are the other way round)
+            idx = [i for i, (ti, _) in enumerate(cells) if ti == t]
+            if idx:
+                nodes = np.asarray([cells[i][1] for i in idx], dtype=np.int64)
+                nodes = np.where(_negative(self.points, nodes, mesh.dim)[:, None], nodes[:, flip], nodes)
+                for i, row in zip(idx, nodes):
+                    cells[i] = (t, list(row))
+        self.connectivity = np.asarray([n for _, c in cells for n in c], dtype=np.int64)
+        self.offsets = np.cumsum([len(c) for _, c in cells], dtype=np.int64)
+
+
+def vtu_bytes(geometry: VtkGeometry, point: dict, cell: dict) -> bytes:
+    """A ``.vtu`` file of ``geometry`` with the point and cell fields (:data:`FIELDS`) by name."""
+    scalars = "alpha [-]" if "alpha [-]" in point else None
+    pd_attr = f" Vectors={quoteattr(DISPLACEMENT)}" + (f" Scalars={quoteattr(scalars)}" if scalars else "")
+    g = geometry
+    lines = ['<?xml version="1.0"?>',
+             '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
+             "  <UnstructuredGrid>",
+             f'    <Piece NumberOfPoints="{g.nv}" NumberOfCells="{len(g.types)}">',
+             "      <Points>", _array("Points", g.points), "      </Points>",
+             "      <Cells>", _array("connectivity", g.connectivity), _array("offsets", g.offsets),
+             _array("types", g.types), "      </Cells>",
+             f"      <PointData{pd_attr}>", *(_array(k, a) for k, a in point.items()), "      </PointData>",
+             f"      <CellData Scalars={quoteattr('von Mises [MPa]')}>",
+             *(_array(k, a) for k, a in cell.items()), "      </CellData>",
+             "    </Piece>", "  </UnstructuredGrid>", "</VTKFile>", ""]
+    return "\n".join(lines).encode()
+
+
+def write_vtu(path, data: bytes) -> Path:
+    """Write the ``.vtu`` bytes ``data`` to ``path`` (through a temporary file)."""
+    from .runner import write_atomic
+    path = Path(path)
+    write_atomic(path, data)
+    return path
 
 
 _VTK_DTYPE = {np.dtype("float64"): "Float64", np.dtype("int64"): "Int64", np.dtype("uint8"): "UInt8"}

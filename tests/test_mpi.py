@@ -130,7 +130,7 @@ STUDY = ROOT / "benchmarks" / "mpi_study.py"
 def _mpi_run(launcher, out, *extra):
     env = dict(os.environ, OMP_NUM_THREADS="1")
     return subprocess.run([launcher, "-n", "3", sys.executable, "-m", "mpi4py", "-m", "ngtmc", "run", str(STUDY),
-                           "--mpi", "--no-vtk", "-o", str(out), *extra],
+                           "--mpi", "-o", str(out), *extra],
                           capture_output=True, text=True, timeout=600, env=env)
 
 
@@ -140,7 +140,7 @@ def run_folders(tmp_path_factory):
     with ``--mpi`` on 3 ranks."""
     launcher = _mpi_launcher()
     base = tmp_path_factory.mktemp("mpi_run")
-    serial = ngtmc.run_study(str(STUDY), output=base / "serial", report=False, vtk=False, progress=False)
+    serial = ngtmc.run_study(str(STUDY), output=base / "serial", report=False, progress=False)
     scratch_before = _scratch_folders()
     proc = _mpi_run(launcher, base / "mpi")
     assert proc.returncode == 0, f"mpiexec failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
@@ -189,10 +189,11 @@ def _scratch_folders() -> set:
 def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
     """``mpiexec -n 3 python -m mpi4py -m ngtmc run STUDY --mpi``: rank 0 writes history, metadata
     and report; the history is the serial run's (same steps and iteration counts, values within
-    1e-9 of their scale) through contact, the peak and the crack; the mesh is counted once; no
-    checkpoint and no snapshots are written (the fields are the ranks' own), and the report says
-    why it shows no fields. Each rank writes its own checkpoint. The other ranks print nothing and
-    leave no scratch folder."""
+    1e-9 of their scale) through contact, the peak and the crack; the mesh is counted once; the
+    snapshots and the ParaView file, gathered from the ranks on rank 0, are the serial run's to
+    1e-9 of each field's scale (same vertices, elements and numbering); the report says where the
+    fields come from. Each rank writes its own checkpoint. The other ranks print nothing and leave
+    no scratch folder."""
     import json
     serial, par, proc, _, left = run_folders
     a = _same_history(serial, par)
@@ -204,7 +205,20 @@ def test_ngtmc_run_mpi_writes_the_run_folder_of_the_serial_run(run_folders):
         assert mp["mesh"][key] == ms["mesh"][key], key
     names = {f.name for f in (par / "checkpoint").iterdir()}
     assert {f"main.rank{r}of3.npz" for r in range(3)} <= names and "main.npz" not in names
-    assert not (par / "snapshots.npz").exists()
+    # the fields gathered on rank 0 in the serial mesh's numbering: the serial run's snapshots and VTK
+    zs, zp = np.load(serial / "snapshots.npz"), np.load(par / "snapshots.npz")
+    assert sorted(zs.files) == sorted(zp.files)
+    for k in zs.files:
+        assert zp[k].shape == zs[k].shape, k
+        assert np.max(np.abs(zp[k] - zs[k]), initial=0.0) <= 1e-9 * max(np.max(np.abs(zs[k]), initial=0.0), 1.0), k
+    import meshio
+    vs, vp = (meshio.read(d / "vtk" / "main_0000.vtu") for d in (serial, par))
+    assert np.array_equal(vs.points, vp.points) and np.array_equal(vs.cells[0].data, vp.cells[0].data)
+    for k in vs.point_data:
+        assert np.max(np.abs(vp.point_data[k] - vs.point_data[k])) <= 1e-9 * max(np.max(np.abs(vs.point_data[k])), 1.0), k
+    for k in vs.cell_data:
+        ref = vs.cell_data[k][0]
+        assert np.max(np.abs(vp.cell_data[k][0] - ref)) <= 1e-9 * max(np.max(np.abs(ref)), 1.0), k
     assert "computed on 3 MPI ranks" in (par / "report.html").read_text()
     assert proc.stdout.count("report:") == 1
     assert not left

@@ -155,7 +155,8 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         Every case on one mesh distributed over the MPI ranks this process belongs to
         (``mpiexec -n 3 python -m mpi4py -m ngtmc run ... --mpi``; :mod:`ngtmc.distributed`, the
         extra ``mpi``). Every rank calls this; rank 0 writes the run folder and the report
-        (history and metadata; no field snapshots and no ParaView series), and every rank its
+        (history, metadata, and the snapshots and ParaView series of the fields gathered from the
+        ranks, :mod:`ngtmc.rank_snapshots`), and every rank its
         checkpoints, ``checkpoint/<case>.rank<r>of<n>.npz``, so ``resume=True`` continues on the
         same number of ranks. The conditions :func:`ngtmc.distributed.check_supported` refuses are
         refused before anything is solved. See docs/parallel.md.

@@ -187,8 +187,11 @@ class _Run(RunFolder):
                           f"{mesh_info['ndof_u']} displacement dofs, {mesh_info['ndof_alpha']} phase-field dofs "
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
-        # on MPI ranks the fields are the ranks' own: no snapshots; each rank checkpoints its part
-        snaps = Snapshots(case, sim.solver, vtk_dir) if self.comm is None else _NoSnapshots()
+        if self.comm is None:
+            snaps = Snapshots(case, sim.solver, vtk_dir)
+        else:  # the fields gathered on rank 0 in the serial mesh's numbering; each rank checkpoints its part
+            from ..rank_snapshots import GatheredSnapshots
+            snaps = GatheredSnapshots(case, sim.solver, vtk_dir, self.comm, serial)
         fingerprint = _rank_fingerprint(sim.solver) if self.comm is not None else None
         if ck is not None and fingerprint is not None:
             same = ck.get("mpi_fingerprint") is not None and np.array_equal(ck["mpi_fingerprint"], fingerprint)
@@ -298,24 +301,6 @@ class _Run(RunFolder):
             raise
         self.status = "completed"
         self.write_all()
-
-
-class _NoSnapshots:
-    """The snapshots of a case on MPI ranks: none (each rank holds its own part of the fields)."""
-
-    steps: list = []
-
-    def maybe_take(self, prev_load, row, final=False):
-        pass
-
-    def take(self, row):
-        pass
-
-    def arrays(self, name):
-        return {}
-
-    def state(self):
-        return {}
 
 
 def peak_memory_mb() -> float:
