@@ -9,6 +9,7 @@ down towards a corner, where nobody would place a band beforehand).
     PYTHONPATH=. OMP_NUM_THREADS=1 python benchmarks/adaptivity.py uniform --scene shear
     PYTHONPATH=. OMP_NUM_THREADS=1 python benchmarks/adaptivity.py amr --scene shear
     PYTHONPATH=. python benchmarks/adaptivity.py compare --scene shear         # the path of amr against uniform
+    PYTHONPATH=. OMP_NUM_THREADS=1 python benchmarks/adaptivity.py amr --scene shear --scheme single-pass
 
 Shear: the same plate with its slit to the centre (0.5, 0.5), the top moved in x (y held) to
 0.016 mm, path-following scheme (the three-point bending's default), same step control. Each run
@@ -74,11 +75,16 @@ def crack_points(solver) -> np.ndarray:
     return np.array(out).reshape(-1, 2)
 
 
-def compare(scene_name: str):
+def _tag(scheme: str | None, default: str | None = None) -> str:
+    """File-name tag of a run with a scheme other than its scene's default ('' otherwise)."""
+    return "" if scheme is None or scheme == default else f"-{scheme}"
+
+
+def compare(scene_name: str, scheme: str | None = None):
     """Distances between the crack vertices of the adaptive and the uniform run (mm)."""
     from scipy.spatial import cKDTree
-    a = np.load(RESULTS / f"adaptivity-{scene_name}-amr-crack.npy")
-    u = np.load(RESULTS / f"adaptivity-{scene_name}-uniform-crack.npy")
+    a = np.load(RESULTS / f"adaptivity-{scene_name}-amr{_tag(scheme)}-crack.npy")
+    u = np.load(RESULTS / f"adaptivity-{scene_name}-uniform{_tag(scheme)}-crack.npy")
     out = {"scene": scene_name, "h_crack": H_CRACK, "points_amr": len(a), "points_uniform": len(u)}
     for name, p, q in (("amr_to_uniform", a, u), ("uniform_to_amr", u, a)):
         d, _ = cKDTree(q).query(p)
@@ -88,11 +94,12 @@ def compare(scene_name: str):
     return out
 
 
-def main(kind: str, scene_name: str = "notched", **adapt_kw):
+def main(kind: str, scene_name: str = "notched", scheme: str | None = None, **adapt_kw):
     if kind == "compare":
-        return compare(scene_name)
-    make, stop, scheme = {"notched": (notched_plate, 0.009, "single-pass"),
-                          "shear": (sheared_plate, 0.016, "path-following")}[scene_name]
+        return compare(scene_name, scheme)
+    make, stop, default = {"notched": (notched_plate, 0.009, "single-pass"),
+                           "shear": (sheared_plate, 0.016, "path-following")}[scene_name]
+    scheme = scheme or default
     if kind == "amr":
         scene = make(maxh=COARSE, **({"h_band": COARSE} if scene_name == "notched" else {}), l0=L0)
         adapt = ngtmc.Adaptivity(h_crack=H_CRACK, **adapt_kw)
@@ -124,7 +131,7 @@ def main(kind: str, scene_name: str = "notched", **adapt_kw):
     if scene_name == "notched":
         out["crack_y"] = crack_height(s)
     if kind in ("amr", "uniform"):
-        np.save(RESULTS / f"adaptivity-{scene_name}-{kind}-crack.npy", crack_points(s))
+        np.save(RESULTS / f"adaptivity-{scene_name}-{kind}{_tag(scheme, default)}-crack.npy", crack_points(s))
     print(json.dumps(out), flush=True)
     return out
 
@@ -132,12 +139,17 @@ def main(kind: str, scene_name: str = "notched", **adapt_kw):
 if __name__ == "__main__":
     args = sys.argv[2:]
     scene_name = "notched"
+    scheme = None
     if "--scene" in args:
         k = args.index("--scene")
         scene_name = args[k + 1]
+        del args[k:k + 2]
+    if "--scheme" in args:
+        k = args.index("--scheme")
+        scheme = args[k + 1]
         del args[k:k + 2]
     kw = {}
     for arg in args:
         k, v = arg.split("=")
         kw[k] = float(v) if "." in v or "e" in v else int(v)
-    main(sys.argv[1], scene_name, **kw)
+    main(sys.argv[1], scene_name, scheme, **kw)
