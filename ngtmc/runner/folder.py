@@ -20,9 +20,10 @@ import numpy as np
 import pandas as pd
 
 from ..plugins import force_unit
-from ..runfiles import (HISTORY_UNITS, CheckpointStore, CheckpointWarning, jsonable, parameters_hash, peak, physics_hash,
+from ..runfiles import (HISTORY_UNITS, CheckpointWarning, jsonable, parameters_hash, peak, physics_hash,
                         run_description, write_atomic, write_json, write_npz)
 from ..scene import _names
+from .checkpoints import CheckpointStore
 from ..snapshots import Snapshots
 from ..study import Case, StudyError
 
