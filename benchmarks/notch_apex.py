@@ -6,7 +6,7 @@ notch's as its apex is refined, the discretisation of the apex would be the caus
 the difference belongs to the model (a notch shape at the scale of l0). The flat notch refined
 the same way is the control: what local refinement alone does to a peak.
 
-    python -m benchmarks.notch_apex --resolution quick --levels 0 2 4 [--stop-load 0.06]
+    python -m benchmarks.notch_apex --resolution quick --levels 0 2 4 [--stop-load 0.06] [--set l0=0.06]
 
 Prints one line per run (peak N/mm, load at peak mm, elements, steps, Newton iterations, wall
 s) and writes them as JSON to ``--out`` (default benchmarks/results/notch_apex-<resolution>-<UTC>.json).
@@ -62,6 +62,8 @@ def main(argv=None):
     ap.add_argument("--radius", type=float, default=None, help="mm (default 2 l0)")
     ap.add_argument("--shapes", nargs="+", default=["v", "flat"])
     ap.add_argument("--stop-load", type=float, default=0.06, help="mm (the window peak is at about 0.045 mm)")
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="a further study parameter (repeatable), e.g. --set l0=0.06")
     ap.add_argument("--out", default=None)
     a = ap.parse_args(argv)
     mod = load_study("three_point_bending")
@@ -70,10 +72,13 @@ def main(argv=None):
     out = Path(a.out) if a.out else Path(__file__).resolve().parent / "results" / f"notch_apex-{a.resolution}-{stamp}.json"
     for shape in a.shapes:
         for lv in a.levels:
+            extra = dict(kv.split("=", 1) for kv in a.overrides)
             _, p = study_parameters(mod, a.resolution, {"loading": "window", "notch_shape": shape,
-                                                        "scheme": "path-following", "stop_load": str(a.stop_load)})
+                                                        "scheme": "path-following", "stop_load": str(a.stop_load),
+                                                        **extra})
             radius = a.radius if a.radius is not None else 2 * float(p["l0"])
             r = run(mod, p, lv, radius)
+            r["overrides"] = extra
             rows.append(r)
             print(f"{shape:5s} levels {lv}  peak {r['peak_N_per_mm']:.3f} N/mm at {r['peak_load_mm']:.5f} mm  "
                   f"{r['elements']} elements  {r['steps']} steps  {r['newton_iterations']} Newton  "

@@ -201,9 +201,11 @@ as the mesh refines (window, V against flat: +9.8 %, +7.2 %, +6.3 % at quick, me
 paper 40.04 against 37.66 N/mm, -4.7 % and -10.3 % from Ambati; indenter: +7.6 %, +7.2 % at
 quick, medium). Two bisections of the elements within 2 l0 of the notch tip (quick, window,
 path following; ``python -m benchmarks.notch_apex``) lower the V's peak from 41.06 to 38.35 N/mm
-and the flat notch's from 37.17 to 36.14 N/mm: the V's excess falls from +10.5 % to +6.1 %, so
-about 40 % of it at quick is the discretisation of its apex (narrower than an element); the
-rest is not explained (docs/fidelity.md). **Fracture excluded under the
+and the flat notch's from 37.17 to 36.14 N/mm: the V's excess falls from +10.5 % to +6.1 %, and
+to +4.5 % with three (38.31 against 36.66 N/mm; the flat notch's peak scatters by ±1.5 % between
+refinements); with l0 doubled on the same mesh it is +7.1 %. So the excess follows the
+resolution of the apex (narrower than an element) in units of l0 and keeps falling as it is
+refined: mostly a discretisation effect, not a property of the notch shape (docs/fidelity.md). **Fracture excluded under the
 load (+0.2 %, +0.4 % with the window) or allowed at the supports (-0.2 %) does not move the
 peak.** The linear-elastic reference (:func:`linear_elastic_slope`, window load, flat notch) is
 0.912 N/mm per micrometre converged, equal to Ambati's 0.915 within 0.5 %, and 0.959 with the
