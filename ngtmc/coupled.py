@@ -36,6 +36,7 @@ import ngsolve as ngs
 
 from .materials import deformation_gradient
 from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
+from .dissipation import Dissipation
 from .discretisation import bilinear_form, rules
 from .energy_forms import _QuadraticPlus, merged_terms
 from .solver import NewtonResult
@@ -143,7 +144,8 @@ class CoupledNewton:
         self.relaxations = 0
         self.relax = True
         self.floor_worst = 0.0
-        self._wf_form = None
+        #: the dissipated energy D of path following (:mod:`ngtmc.dissipation`)
+        self.D = Dissipation(solver)
         self.load_solved = None
         self.s = s = solver
         #: relative residual tolerance of the displacement part: NewtonOptions.rtol, else COUPLED_RTOL
@@ -167,7 +169,7 @@ class CoupledNewton:
         self.X.Update()
         self.x.Update()
         self.form.mesh_changed()
-        self._wf_form = None
+        self.D.reset()
         self._mesh_data()
 
     def _mesh_data(self):
@@ -249,56 +251,6 @@ class CoupledNewton:
         self.s.u.vec.FV().NumPy()[:] = xN[:self.nu]
         self.s.alpha.vec.FV().NumPy()[:] = xN[self.nu:]
 
-    # ------------------------------------------------------------------ dissipation
-    def dissipation(self, alpha_vec: np.ndarray | None = None) -> float:
-        """Dissipated energy D = W_f / c_w = 1/2 alpha^T M alpha of the phase field (N mm per mm of
-        thickness in 2D, N mm in 3D), M the matrix of int Gc (alpha beta / l0 + l0 grad alpha .
-        grad beta) over the fracture regions; of the solver's alpha, or of ``alpha_vec``."""
-        a = self.s.alpha.vec.FV().NumPy() if alpha_vec is None else alpha_vec
-        self._assemble_wf()
-        return 0.5 * self._wf_dot(a, self._wf_matvec(a))
-
-    def _assemble_wf(self):
-        key = self.s._design_key()
-        if getattr(self, "_wf_key", object()) == key and self._wf_form is not None:
-            return
-        s = self.s
-        a, b = s.fes_a.TnT()
-        M = ngs.BilinearForm(s.fes_a, symmetric=True)
-        M += (s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))) * ngs.dx(
-            definedon=s.mesh.Materials(s._frac_re))
-        M.Assemble()
-        self._wf_form = M
-        self._wf_key = key
-        self._wf_x = M.mat.CreateColVector()
-        if s.ranks.parallel:  # filled from numpy with alpha values that agree on every rank
-            self._wf_x.SetParallelStatus(ngs.PARALLEL_STATUS.CUMULATED)
-        self._wf_y = M.mat.CreateColVector()
-
-    def _wf_matvec(self, a: np.ndarray) -> np.ndarray:
-        """M a: the gradient dD/dalpha (N mm per unit alpha, per thickness in 2D); on a distributed
-        mesh each rank's part of it (sum the products with :meth:`_wf_dot`)."""
-        self._wf_x.FV().NumPy()[:] = a
-        self._wf_y.data = self._wf_form.mat * self._wf_x
-        return self._wf_y.FV().NumPy().copy()
-
-    def _wf_dot(self, a: np.ndarray, grad: np.ndarray) -> float:
-        """a . grad for an alpha-like array ``a`` (the same on every rank that shares a dof) and a
-        product ``grad`` of :meth:`_wf_matvec` (summed over the ranks)."""
-        return self.s.ranks.sum(float(a @ grad))
-
-    def fracture_mean(self, cf) -> float:
-        """Mean of the coefficient ``cf`` over the fracture regions (area or volume weighted)."""
-        s = self.s
-        frac = s.mesh.Materials(s._frac_re)
-        area = ngs.Integrate(ngs.CoefficientFunction(1.0), s.mesh, definedon=frac)
-        return float(ngs.Integrate(cf, s.mesh, definedon=frac)) / float(area)
-
-    def reference_toughness(self) -> float:
-        """Mean Gc over the fracture regions, N/mm (for converting a crack advance into a
-        dissipation increment)."""
-        return self.fracture_mean(self.s.Gc)
-
     # ------------------------------------------------------------------ solve
     def solve(self, load: float, alpha_upper: np.ndarray | None = None, dissipation: float | None = None,
               load_bounds: tuple[float, float] | None = None, max_load_step: float | None = None) -> NewtonResult:
@@ -313,7 +265,7 @@ class CoupledNewton:
 
         ``dissipation`` (N mm per mm of thickness in 2D): path following. The load becomes an
         unknown, and the step is closed by the constraint D(alpha) - D(alpha_{n-1}) =
-        ``dissipation`` (dissipation control, D of :meth:`dissipation`); ``load`` is the first
+        ``dissipation`` (dissipation control, :attr:`D`); ``load`` is the first
         guess, and the current u must hold the boundary values of ``load``. Each Newton step is
         the bordered solution of the linearised equations: two solves with one factorization,
         x = a + dlambda b, with b the response to a unit load change, and dlambda from the
@@ -348,8 +300,7 @@ class CoupledNewton:
         if path:
             if not dissipation > 0:
                 raise ValueError(f"dissipation = {dissipation!r} N mm must be > 0")
-            self._assemble_wf()
-            d_target = self.dissipation(a_low) + float(dissipation)
+            d_target = self.D.value(a_low) + float(dissipation)
             scale_g = float(dissipation)
             lam_lo, lam_hi = load_bounds if load_bounds is not None else (-math.inf, math.inf)
             xN[:nu][dir_u] = s.dirichlet_target(lam)[dir_u]
@@ -379,7 +330,7 @@ class CoupledNewton:
             return ranks.masked_norm(rvec, free_ux), ranks.norm_of(phi / c, rvec, nu), held
 
         def constraint(xv):
-            return 0.5 * self._wf_dot(xv[nu:], self._wf_matvec(xv[nu:])) - d_target if path else 0.0
+            return self.D.value(xv[nu:]) - d_target if path else 0.0
 
         def merit_of(ru, ra, gv, scale_u):
             """The line search's merit: each residual relative to its natural scale (units differ:
@@ -454,7 +405,7 @@ class CoupledNewton:
                 tmp.data = self.form.mat * w
                 lin(tmp, w)
                 bN = np.where(free, -w.FV().NumPy(), unit)
-                grad = self._wf_matvec(a_cur)
+                grad = self.D.gradient(a_cur)
                 slope = ranks.sum(float(grad @ bN[nu:]))
                 if not abs(slope) > 0.0:
                     self.load_unresponsive = True

@@ -142,17 +142,17 @@ class DissipationPath:
         self.coupled = c = sim.coupled
         s = sim.solver
         if crack_advance is None:
-            crack_advance = c.fracture_mean(s.l0)
+            crack_advance = c.D.fracture_mean(s.l0)
         self.crack_advance = float(crack_advance)
         if s.dim == 3 and crack_front is None:
             lo, hi = s.fracture_box()
             crack_front = float(np.min(hi - lo))
         #: length of the advancing crack front, mm (3D); 1 in 2D, where D is per mm of thickness
         self.crack_front = float(crack_front) if s.dim == 3 else 1.0
-        self.gc_ref = c.reference_toughness()
+        self.gc_ref = c.D.reference_toughness()
         #: dD / d(load) of the last accepted step, N mm per mm of load (per thickness in 2D)
         self.rate = 0.0
-        self.d_prev = c.dissipation()
+        self.d_prev = c.D.value()
         #: accepted steps taken under dissipation control
         self.dissipation_steps = 0
         #: True after a dissipation step: the next step is one too, until the load of a
@@ -227,7 +227,7 @@ class DissipationPath:
         du = abs(sch.load(t_new) - load_n)
         if not self.dissipating and self.rate * du <= 0.5 * dD:
             ok, info = self._fixed(sch.load(t_new), info)
-            if ok and self.coupled.dissipation() - self.d_prev <= 2.0 * dD:
+            if ok and self.coupled.D.value() - self.d_prev <= 2.0 * dD:
                 info["t_new"] = t_new
                 return True, info
             s.set_state(saved)
@@ -329,7 +329,7 @@ class DissipationPath:
             self.x_prev = (np.array(previous[0]["u"], dtype=float), np.array(previous[0]["alpha"], dtype=float))
         else:
             self.x_prev, self.load_prev = None, None
-        self.d_prev = self.coupled.dissipation(np.asarray(before["alpha_committed"], dtype=float))
+        self.d_prev = self.coupled.D.value(np.asarray(before["alpha_committed"], dtype=float))
 
     def resolve(self, load: float, t_new: float):
         """Solve the step just converged on the old mesh again on the refined one (predictor-
@@ -423,7 +423,7 @@ class DissipationPath:
             self.growth = min(self.ceiling, 2.0 * self.growth)
         self._last_kind = None
         self._scale_ref = self.sim.control_state.scale
-        d = self.coupled.dissipation()
+        d = self.coupled.D.value()
         delta = d - self.d_prev
         self.d_prev = d
         self.delta_d_prev = delta

@@ -334,8 +334,7 @@ def coupled_gradient(path: CoupledPath, objective, wrt=("rho", "E", "Gc", "l0", 
         w_g = 0.0
         m = np.zeros(nu + na)
         if diss[n]:
-            c._assemble_wf()
-            m[nu:] = c._wf_matvec(path.state(n)["alpha"])  # d D / d alpha_n
+            m[nu:] = c.D.gradient(path.state(n)["alpha"])  # d D / d alpha_n
             b = solve_t(m)
             e_load = np.zeros(nu + na)  # d u_D / d lambda of every Dirichlet dof (the loads are linear)
             e_load[:nu] = np.where(s._dir_np, s.dirichlet_target(1.0) - s.dirichlet_target(0.0), 0.0)
@@ -354,7 +353,7 @@ def coupled_gradient(path: CoupledPath, objective, wrt=("rho", "E", "Gc", "l0", 
         eta = eta - np.where(mask, 0.0, eng._irs_tmp.vec.FV().NumPy())
         if diss[n]:
             a_prev = st_prev["alpha"]
-            abar_carry = abar_carry + w_g * c._wf_matvec(a_prev)
+            abar_carry = abar_carry + w_g * c.D.gradient(a_prev)
             ce.a_D.vec.FV().NumPy()[:] = path.state(n)["alpha"]
             acc.add(ce.D_forms, -w_g)
             ce.a_D.vec.FV().NumPy()[:] = a_prev

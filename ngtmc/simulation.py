@@ -413,7 +413,7 @@ class Simulation(StepSchemes):
             if "path" in st:
                 self._path.set_state(st["path"], st.get("arrays", {}))
             else:  # a state of a run without path following: start the rule from this state
-                self._path.set_state({"rate": 0.0, "d_prev": self.coupled.dissipation(), "dissipation_steps": 0})
+                self._path.set_state({"rate": 0.0, "d_prev": self.coupled.D.value(), "dissipation_steps": 0})
 
     def _replay_refinements(self, st: dict):
         """Bring the mesh to the one of state ``st``: refine it by the refinements that ``st``
