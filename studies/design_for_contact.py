@@ -288,8 +288,16 @@ def post_results(p: dict, history: pd.DataFrame, results: dict) -> dict:
         checks.append({"direction": j, "finite_difference": fd, "adjoint": adj, "relative_difference": rel,
                        "same_load_steps": bool(same_steps)})
     results = dict(results)
+    table = {"title": "Adjoint gradient against central differences",
+             "caption": (f"Per random design direction d_j (|d_j,i| <= initial_fill): the adjoint dW/dx . d_j and the "
+                         f"central difference (W(x0 + eps d_j) - W(x0 - eps d_j)) / (2 eps) of the forward cases "
+                         f"d<j>_plus and d<j>_minus, eps = {eps:g}; W the external work over the stroke. A blank "
+                         "difference: its two forward runs took different load steps, or are not done."),
+             "columns": [{"name": "direction", "unit": ""}, {"name": "adjoint", "unit": "N mm"},
+                         {"name": "central difference", "unit": "N mm"}, {"name": "relative difference", "unit": "-"}],
+             "rows": [[c["direction"], c["adjoint"], c["finite_difference"], c["relative_difference"]] for c in checks]}
     results["gradient_check"] = {"eps": eps, "unit": "N mm per unit x", "directions": checks,
-                                 "W_initial": external_work(init) if init is not None else None}
+                                 "W_initial": external_work(init) if init is not None else None, "report_table": table}
     return results
 
 

@@ -109,3 +109,7 @@ def test_gradient_check_runs_its_finite_differences_as_cases_on_dask_workers(tmp
                                                                         rel=1e-12)
     hist = pd.read_csv(out / "history.csv")
     assert set(hist["case"]) == {"initial", "d0_plus", "d0_minus", "d1_plus", "d1_minus"}
+    # the report's "Study tables" shows the check, units in the heads
+    from ngtmc.report import render_report
+    html = render_report(out).read_text()
+    assert "Adjoint gradient against central differences" in html and "central difference [N mm]" in html

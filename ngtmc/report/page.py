@@ -193,6 +193,8 @@ def render_report(run_dir, output=None) -> Path:
         figs[fid] = fig_study(spec)
         study_figures.append({"id": fid, "title": str(spec.get("title", "")), "caption": str(spec.get("caption", ""))})
 
+    study_tables = _study_tables(meta)
+
     interp = None
     if study == "contact_gamma0":
         f1, f2, info = _fig_interpolation(meta, cases)
@@ -307,7 +309,7 @@ def render_report(run_dir, output=None) -> Path:
         "n_rows": int(len(history)),
         "references": [r for r in meta.get("references") or [] if isinstance(r, dict)],
         "key_rows": key_number_rows(meta, history), "ref_peaks": ref_peaks,
-        "case_nums": case_nums, "interp": interp, "study_figures": study_figures,
+        "case_nums": case_nums, "interp": interp, "study_figures": study_figures, "study_tables": study_tables,
         "speed": speed, "speed_meaningful": speed_meaningful,
         "time_split": time_split_rows(meta, history, cases),
         "mesh_info": mesh_info, "has_snapshots": bool(mesh_info or snap3d), "snap3d": snap3d,
@@ -327,4 +329,21 @@ def render_report(run_dir, output=None) -> Path:
     out = Path(output) if output is not None else run_dir / "report.html"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(page, encoding="utf-8")
+    return out
+
+
+def _study_tables(meta: dict) -> list[dict]:
+    """The tables a study's ``post_results`` adds to entries of ``results`` as ``report_table``
+    (docs/study-interface.md): title, caption, columns with their units, rows formatted."""
+    out = []
+    for entry in (meta.get("results") or {}).values():
+        spec = entry.get("report_table") if isinstance(entry, dict) else None
+        if not isinstance(spec, dict):
+            continue
+        cols = [c for c in spec.get("columns") or [] if isinstance(c, dict)]
+        heads = [f"{c.get('name', '')} [{c['unit']}]" if c.get("unit") else str(c.get("name", "")) for c in cols]
+        rows = [[fmt(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else ("-" if v is None else str(v))
+                 for v in row] for row in spec.get("rows") or []]
+        out.append({"title": str(spec.get("title", "")), "caption": str(spec.get("caption", "")), "heads": heads,
+                    "rows": rows})
     return out
