@@ -17,7 +17,7 @@ import sys
 import numpy as np
 import ngsolve as ngs
 
-from .snapshots import Snapshots, solid_surface
+from .snapshots import Snapshots, mesh_drawing
 from .vtk import VtkGeometry, VtkWriter, vtu_bytes, write_vtu
 
 __all__ = ["RankGather", "GatheredSnapshots"]
@@ -98,35 +98,21 @@ class GatheredSnapshots(Snapshots):
         self._vtk_on = vtk_on
         self._geometry = None
 
-    def _make_mesh(self) -> dict:
-        if not self.root:
-            return {"vertices": np.zeros((0, self.dim)), "triangles": np.zeros((0, 3), dtype=np.int64),
-                    "rho": np.zeros(0)}
-        mesh = self.serial_scene.mesh
-        ng = mesh.ngmesh
-        vertices = np.asarray(ng.Coordinates(), dtype=float)[:mesh.nv, :self.dim].copy()
-        rho_el = self._rho
-        if self.dim == 3:
-            tri, rho = solid_surface(mesh, rho_el)
-            return {"vertices": vertices, "triangles": tri, "rho": rho}
-        tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        return {"vertices": vertices, "triangles": tri, "rho": rho_el}
-
     def current_mesh(self) -> dict:
+        """The serial mesh's drawing with the gathered density on rank 0, an empty one on the
+        others; made at the first call, which every rank makes at the same point (a gather)."""
         if self._current is None:
-            self._rho = self.gather.elements(self.solver.rho.vec.FV().NumPy().copy())   # collective
-            self._current = (None, self._make_mesh())
+            rho = self.gather.elements(self.solver.rho.vec.FV().NumPy().copy())
+            empty = {"vertices": np.zeros((0, self.dim)), "triangles": np.zeros((0, 3), dtype=np.int64),
+                     "rho": np.zeros(0)}
+            self._current = (None, mesh_drawing(self.serial_scene.mesh, rho) if self.root else empty)
         return self._current[1]
 
     def vertex_fields(self):
-        s = self.solver
-        nv = s.mesh.nv
-        u = np.stack([s.u.components[i].vec.FV().NumPy()[:nv].copy() for i in range(self.dim)], axis=1)
-        a = s.alpha.vec.FV().NumPy()[:nv].copy() if s.alpha is not None else np.zeros(nv)
-        u_all, a_all = self.gather.vertices(u), self.gather.vertices(a)
+        u, a = (self.gather.vertices(f) for f in super().vertex_fields())
         if not self.root:
             return np.zeros((0, self.dim)), np.zeros(0)
-        return u_all, a_all
+        return u, a
 
     def section_values(self) -> np.ndarray:
         """alpha on the section grid, each point from the rank whose part of the mesh holds it
@@ -140,17 +126,13 @@ class GatheredSnapshots(Snapshots):
             out = np.where(np.isnan(out), p, out)
         return out
 
-    def take(self, row: dict):
-        self.current_mesh()   # the first gather of the case happens on every rank at the same point
-        super().take(row)
-
     def write_vtk(self, k: int, load: float):
         """Snapshot ``k`` as ``vtk/<case>_<k>.vtu`` on the serial mesh: every rank evaluates the
         fields of :class:`~ngtmc.vtk.VtkWriter` on its part, rank 0 writes them."""
         if not self._vtk_on:
             return
         if self._vtk is None:
-            self._vtk = VtkWriter(self.solver)
+            self._vtk = VtkWriter(self.solver, geometry=False)
         point = {name: self.gather.vertices(a) for name, a in self._vtk.point_data().items()}
         cell = {name: self.gather.elements(a) for name, a in self._vtk.cell_data().items()}
         if not self.root:

@@ -243,7 +243,7 @@ class _CoupledEngine:
         # D(a) = 1/2 int Gc (a^2 / l0 + l0 |grad a|^2): its partials in rho and the parameters
         self.a_D = ngs.GridFunction(s.fes_a)
         aD = self.a_D
-        dens = 0.5 * (s.Gc / s.l0 * aD * aD + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(aD), ngs.Grad(aD)))
+        dens = 0.5 * phase_field_piece(s, aD, aD)[0]
         self.D_forms = eng._scalar_forms([(dens, eng.dx_af)], with_alpha=False)
 
 

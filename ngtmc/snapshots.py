@@ -56,19 +56,8 @@ class Snapshots:
         ``mesh_generation``)."""
         key = (id(self.solver.mesh), self.solver.mesh_generation)
         if self._current is None or self._current[0] != key:
-            self._current = (key, self._make_mesh())
+            self._current = (key, mesh_drawing(self.solver.mesh, self.solver.rho.vec.FV().NumPy().copy()))
         return self._current[1]
-
-    def _make_mesh(self) -> dict:
-        mesh = self.solver.mesh
-        ng = mesh.ngmesh
-        vertices = np.asarray(ng.Coordinates(), dtype=float)[:mesh.nv, :self.dim].copy()
-        rho_el = self.solver.rho.vec.FV().NumPy().copy()
-        if self.dim == 3:
-            tri, rho = solid_surface(mesh, rho_el)
-            return {"vertices": vertices, "triangles": tri, "rho": rho}
-        tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-        return {"vertices": vertices, "triangles": tri, "rho": rho_el}
 
     def _mesh_index(self) -> int:
         """Index of the solver's current mesh in :attr:`meshes` (added if it is new)."""
@@ -260,6 +249,19 @@ class Snapshots:
             return
         files = [(load, f"{self.case.name}_{k:04d}.vtu") for k, load in enumerate(self.loads)]
         write_pvd(self.vtk_dir / f"{self.case.name}.pvd", [(load, f) for load, f in files if (self.vtk_dir / f).exists()])
+
+
+def mesh_drawing(mesh, rho_el: np.ndarray) -> dict:
+    """What a snapshot draws of ``mesh`` with the pseudo-density ``rho_el`` per element: vertices
+    (nv, d) in mm, triangles (nt, 3) (2D: the elements; 3D: the surface of the solid,
+    :func:`solid_surface`) and rho per triangle."""
+    ng = mesh.ngmesh
+    vertices = np.asarray(ng.Coordinates(), dtype=float)[:mesh.nv, :mesh.dim].copy()
+    if mesh.dim == 3:
+        tri, rho = solid_surface(mesh, rho_el)
+        return {"vertices": vertices, "triangles": tri, "rho": rho}
+    tri = ng.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
+    return {"vertices": vertices, "triangles": tri, "rho": rho_el}
 
 
 # faces of each volume element type, as local vertex numbers (quadrilaterals as 4)

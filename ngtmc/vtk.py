@@ -86,12 +86,14 @@ class VtkWriter:
     Built once per solver (the mesh's points and cells and the element-mean forms are kept); each
     :meth:`write` evaluates the solver's current u, alpha and history."""
 
-    def __init__(self, solver):
+    def __init__(self, solver, geometry: bool = True):
         self.solver = s = solver
         mesh = s.mesh
         self.nv = mesh.nv
         self.fracture = s.alpha is not None
-        self.geometry = VtkGeometry(mesh)
+        #: points and cells of the solver's mesh (None with ``geometry=False``: fields only, as on
+        #: MPI ranks, whose fields rank 0 writes on the serial mesh)
+        self.geometry = VtkGeometry(mesh) if geometry else None
 
         # element means: int_T f / int_T 1 with the rule the solver uses for f (L2 order 0: dof i = element i)
         l2 = ngs.L2(mesh, order=0)
