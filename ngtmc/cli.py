@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--no-report", action="store_true", help="do not render report.html")
     r.add_argument("--no-vtk", action="store_true", help="do not write the ParaView series")
     r.add_argument("--threads", type=int, default=None,
-                   help="NGSolve threads (default: 1, or 2 for meshes of 20000 elements or more; per worker with --workers or --scheduler, default 1)")
+                   help="NGSolve threads (default: per case, 1, or 2 for meshes of 20000 elements or more, 10000 in 3D; per worker with --workers or --scheduler, default 1)")
     r.add_argument("--workers", type=int, default=None, metavar="N",
                    help="run the cases in parallel on a local Dask cluster of N worker processes "
                         "(needs pip install ngtmc[parallel]; docs/parallel.md)")

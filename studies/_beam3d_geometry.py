@@ -56,52 +56,55 @@ def hemisphere_mesh(p: dict):
     R, gap, vw = float(p["sphere_radius"]), float(p["sphere_gap"]), float(p["sphere_void_half_width"])
     bw, zs, sl = float(p["sphere_band_half_width"]), float(p["sphere_support_zone"]), float(p["sphere_support_length"])
     h_beam = float(p["sphere_h_beam"])
+    quarter = p["sphere_symmetry"] == "quarter"
     xm = L / 2
+    a = float(p["sphere_load_zone"])
+    c = float(p["sphere_contact_box"])
+    yc = H + gap + R
     body = Box(Pnt(0, 0, 0), Pnt(L, H, W)) - Box(Pnt(xm - nw / 2, -1, -1), Pnt(xm + nw / 2, nd, W + 1))
     band_box = Box(Pnt(xm - bw, 0, 0), Pnt(xm + bw, H, W))
     zone_l, zone_r = Box(Pnt(0, 0, 0), Pnt(zs, zs, W)), Box(Pnt(L - zs, 0, 0), Pnt(L, zs, W))
     sq_l, sq_r = Box(Pnt(0, 0, 0), Pnt(sl, sl, W)), Box(Pnt(L - sl, 0, 0), Pnt(L, sl, W))
-    zones = [sq_l, sq_r] + ([zone_l - sq_l, zone_r - sq_r] if zs > sl else [])
-    for z in zones:
-        z.solids.name = "support_zone"
-        z.solids.maxh = h_beam / 2
-    a = float(p["sphere_load_zone"])
-    under = [Box(Pnt(xm - a, H - a, 0), Pnt(xm + a, H, a))] if a > 0 else []
+    under = Box(Pnt(xm - a, H - a, 0), Pnt(xm + a, H, a)) if a > 0 else None
     rest = body - band_box - zone_l - zone_r
     band = body * band_box
-    for u in under:
-        rest, band = rest - u, band - u
-        u.solids.name = "load_zone"
-        u.solids.maxh = float(p["sphere_h_band"])
-    rest.solids.name = "beam"
-    band.solids.name = "band"
-    band.solids.maxh = float(p["sphere_h_band"])
-    yc = H + gap + R
+    if under is not None:
+        rest, band = rest - under, band - under
     ball = Sphere(Pnt(xm, yc, 0), R) * Box(Pnt(xm - R, yc - R, 0), Pnt(xm + R, yc, R))
-    ball.solids.name = "indenter"
-    ball.faces.Max(Y).name = "load"     # the flat face (the void's top face around it stays free)
-    ball.solids.maxh = float(p["sphere_h_indenter"])
     void = Box(Pnt(xm - vw, H, 0), Pnt(xm + vw, yc, W)) - ball
-    c = float(p["sphere_contact_box"])
-    voids = [void]
-    if c > 0:   # the contact patch: finer void under the hemisphere's lowest point
-        near = Box(Pnt(xm - c, H, 0), Pnt(xm + c, min(H + gap + c, yc), c))
-        voids = [void - near, void * near]
-        voids[1].solids.maxh = float(p["sphere_h_contact"])
-        voids[0].solids.maxh = float(p["sphere_h_void"])
+    near = Box(Pnt(xm - c, H, 0), Pnt(xm + c, min(H + gap + c, yc), c)) if c > 0 else None
+    # (solid, region name, maxh or None)
+    parts = [(rest, "beam", None), (band, "band", float(p["sphere_h_band"])),
+             (ball, "indenter", float(p["sphere_h_indenter"])), (sq_l, "support_zone", h_beam / 2),
+             (sq_r, "support_zone", h_beam / 2)]
+    if zs > sl:
+        parts += [(zone_l - sq_l, "support_zone", h_beam / 2), (zone_r - sq_r, "support_zone", h_beam / 2)]
+    if under is not None:
+        parts.append((under, "load_zone", float(p["sphere_h_band"])))
+    if near is not None:   # the contact patch: finer void under the hemisphere's lowest point
+        parts += [(void - near, "void", float(p["sphere_h_void"])), (void * near, "void", float(p["sphere_h_contact"]))]
     else:
-        void.solids.maxh = float(p["sphere_h_void"])
-    for v in voids:
-        v.solids.name = "void"
-    shape = Glue([rest, band, ball] + voids + zones + under)
+        parts.append((void, "void", float(p["sphere_h_void"])))
+    if quarter:   # the mid-span half too: x <= L/2 (symmetry plane x = L/2)
+        keep = Box(Pnt(-1, -1, -1), Pnt(xm, yc + 1, W + 1))
+        parts = [(s * keep, name, h) for s, name, h in parts if s.center.x < xm + 1e-9]
+    for s, name, h in parts:
+        s.solids.name = name
+        if h is not None:
+            s.solids.maxh = h
+        if name == "indenter":
+            s.faces.Max(Y).name = "load"   # the flat face (the void's top face around it stays free)
+    shape = Glue([s for s, _, _ in parts])
     tol = 1e-9
     for f in shape.faces:
-        c = f.center
-        if abs(c.z) < tol:
+        fc = f.center
+        if abs(fc.z) < tol:
             f.name = "sym"
-        elif abs(c.y) < tol and c.x < sl:
+        elif quarter and abs(fc.x - xm) < tol:
+            f.name = "sym_x"
+        elif abs(fc.y) < tol and fc.x < sl:
             f.name = "support_left"
-        elif abs(c.y) < tol and c.x > L - sl:
+        elif abs(fc.y) < tol and fc.x > L - sl:
             f.name = "support_right"
     mesh = ngs.Mesh(OCCGeometry(shape).GenerateMesh(maxh=h_beam))
     mesh.Curve(2)

@@ -14,8 +14,10 @@ dimensions. This study runs them in 3D in two ways:
     compare directly, in N for that thickness.
 (b) **hemisphere**: a notched beam indented by a hemisphere at mid-span and mid-width: the load
     is point-like, the contact patch is a disc and the crack front curves across the width.
-    Half of the beam is modelled (symmetry plane z = 0, u_z held there); the recorded force is
-    the half's reaction (N), the whole beam carries twice it.
+    By default a quarter of the beam is modelled (``sphere_symmetry = "quarter"``: symmetry
+    planes z = 0, u_z held, and x = L/2, u_x held; the left support a roller), so the crack plane
+    is a face of the mesh; ``"half"`` models z >= 0 only (pin and roller supports). The recorded
+    force is the reaction of the modelled part (N): the whole beam carries four (two) times it.
 
 What the 3D slab must give, and why it is not exactly the 2D curve
 -------------------------------------------------------------------
@@ -42,7 +44,8 @@ Geometry of (b), mm (our choices; no published 3D reference exists)
   the 2D beam's length and height), notch across the whole width at mid-span from the bottom,
   ``sphere_notch_depth`` = 0.2 deep, ``sphere_notch_width`` = 0.04 wide, flat tip;
 * supports: strips of the bottom face across the width, ``sphere_support_length`` = 0.1 long, pin
-  (x, y held) on the left and roller (y held) on the right; no fracture in the
+  (x, y held) on the left and roller (y held) on the right (the quarter model: a roller on the
+  left, u_x held on the mid-span plane); no fracture in the
   ``sphere_support_zone`` = 0.15 mm blocks above them;
 * no fracture either in the block of the beam top under the hemisphere, 0.3 long, 0.15 deep and
   0.15 wide (``sphere_load_zone``): without it, damage grew under the point-like contact
@@ -76,11 +79,20 @@ Newton iterations). The 3D run cost 5.6x the CPU time of the 2D one (566 against
 at 0.095113 mm, its 2D twin at 0.559748 N at 0.095171 mm: **+0.40 % and -0.06 %** (115 and 77
 steps, 494 and 411 Newton iterations), 1572 s of CPU against 308 s, 972 MB at its peak.
 
-(b) quick: peak **12.911 N (half model) at 0.07314 mm**, 70 steps, 518 Newton iterations, 2
-cut-backs, 3013 s of CPU, 662 MB. The issue's target of under 5 minutes at quick is not met:
-while the contact patch grows, every step needs 7-11 Newton iterations (docs/three-d.md). The
-run's peak memory is in ``metadata.json``
-(``results.<case>.peak_memory_mb``) and the report.
+(b) quick, quarter model (10896 tetrahedra, 19536 u and 2450 alpha dofs; 2026-12-02): peak
+**6.2013 N (quarter) at 0.0700 mm**, 59 steps, 463 Newton iterations, 6 cut-backs; **400 s for
+the case with two threads** (423 s for the command, set-up and report included), 510 MB at its
+peak; with one thread 597 s. The issue's target of under 5 minutes is not met: the 24 steps of
+the crack run after the peak take 13 Newton iterations each, 70 % of the time (docs/three-d.md).
+The half model at the same sizes peaked at 12.911 N at 0.07314 mm (twice the quarter's: 12.403
+N, **-3.9 %**) in 70 steps and 518 iterations, 3013 s of CPU beside other jobs. On a coarse mesh
+(h = l0 above the notch) the half model is 4.6 % above the quarter; half of that difference goes
+when the half model's mesh has a face at x = L/2 too (the crack on a mesh plane instead of
+across tetrahedra), so the two models differ by the discretisation of the crack, which the
+quarter model resolves better (docs/three-d.md).
+
+The run's peak memory is in ``metadata.json`` (``results.<case>.peak_memory_mb``) and the
+report.
 """
 from __future__ import annotations
 
@@ -110,6 +122,9 @@ PARAMETERS = {
     **{k: _tpb.PARAMETERS[k] for k in _SLAB_KEYS},
     "parts": ("all", "-", "which cases run: 'all', 'slab' (the slab and its 2D twin) or 'hemisphere'"),
     # (b) the hemisphere
+    "sphere_symmetry": ("quarter", "-", "part of the beam modelled: 'half' (z >= 0, symmetry plane z = 0) or "
+                                        "'quarter' (also x <= mid-span, symmetry plane x = L/2); the recorded "
+                                        "force is that of the modelled part"),
     "sphere_beam_length": (4.0, "mm", "beam length (half the 2D beam's)"),
     "sphere_beam_height": (1.0, "mm", "beam height"),
     "sphere_beam_width": (1.0, "mm", "beam width (the half z in [0, width/2] is modelled)"),
@@ -175,7 +190,12 @@ MEASURED: dict = {
                    "peak_load": 0.096625, "steps": 78, "newton_iterations": 345, "cutbacks": 3, "cpu_time_s": 566,
                    "wall_time_s": 911, "peak_memory_mb": 368, "peak_force_vs_2d": -0.000197,
                    "peak_load_vs_2d": 0.0000567},
-    "quick_hemisphere": {"n_elements": 22098, "ndof_u": 36369, "ndof_alpha": 4603, "peak_force": 12.911,
+    "quick_hemisphere_quarter": {"n_elements": 10896, "ndof_u": 19536, "ndof_alpha": 2450, "peak_force": 6.2013,
+                                 "peak_load": 0.0700, "steps": 59, "newton_iterations": 463, "cutbacks": 6,
+                                 "threads": 2, "wall_time_s": 399.7, "cpu_time_s": 777.9, "peak_memory_mb": 510,
+                                 "note": "force of the modelled quarter; alone beside a niced one-thread job; "
+                                         "with one thread: 461 iterations, 596.6 s (docs/three-d.md)"},
+    "quick_hemisphere_half": {"n_elements": 22098, "ndof_u": 36369, "ndof_alpha": 4603, "peak_force": 12.911,
                          "peak_load": 0.07314, "steps": 70, "newton_iterations": 518, "cutbacks": 2,
                          "cpu_time_s": 3013, "wall_time_s": 3422, "peak_memory_mb": 662,
                          "note": "force of the modelled half; interrupted at step 65 and resumed; 7-11 Newton "
@@ -201,6 +221,9 @@ def check_parameters(p: dict):
     if p.get("parts", "all") not in PARTS:
         raise StudyError(f"three_point_bending_3d: parts = {p.get('parts')!r} is not one of "
                          f"{', '.join(map(repr, PARTS))}")
+    if p.get("sphere_symmetry", "quarter") not in ("half", "quarter"):
+        raise StudyError(f"three_point_bending_3d: sphere_symmetry = {p.get('sphere_symmetry')!r} is not 'half' "
+                         "or 'quarter'")
     if not float(p["slab_thickness"]) > 0:
         raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm must be > 0")
     try:
@@ -230,14 +253,23 @@ def build_slab_scene(p: dict) -> ngtmc.Scene:
     return plane_strain_slab(build_plane_strain_scene(p), float(p["slab_thickness"]), name="slab")
 
 
+def _hemisphere_supports(p: dict) -> list:
+    """Half model: pin left, roller right, u_z held on z = 0. Quarter model (``sphere_symmetry``):
+    u_x held on the mid-span plane instead of the right support, and the left support a roller
+    (the span may lengthen, as under the half model's roller)."""
+    if p["sphere_symmetry"] == "quarter":
+        return [ngtmc.Support("support_left", y=True), ngtmc.Support("sym", z=True), ngtmc.Support("sym_x", x=True)]
+    return [ngtmc.Support("support_left", x=True, y=True), ngtmc.Support("support_right", y=True),
+            ngtmc.Support("sym", z=True)]
+
+
 def build_hemisphere_scene(p: dict) -> ngtmc.Scene:
-    """The notched beam under a hemisphere (half across the width; module docstring)."""
+    """The notched beam under a hemisphere (half or quarter, ``sphere_symmetry``; module docstring)."""
     mesh = _geometry.hemisphere_mesh(p)
     mat = ngtmc.Material(E=float(p["E"]), nu=float(p["nu"]), Gc=float(p["Gc"]), l0=float(p["sphere_l0"]))
     return ngtmc.Scene(
         mesh, {"beam|band|support_zone|load_zone|void|indenter": mat},
-        supports=[ngtmc.Support("support_left", x=True, y=True), ngtmc.Support("support_right", y=True),
-                  ngtmc.Support("sym", z=True)],
+        supports=_hemisphere_supports(p),
         fracture_regions=["beam", "band"], gamma0=float(p["gamma0"]),
         residual_stiffness=float(p["residual_stiffness"]),
         load=ngtmc.DisplacementLoad("load", direction="-y", hold_tangential=True),
@@ -266,7 +298,7 @@ def cases(p: dict) -> list[Case]:
     if parts in ("all", "hemisphere"):
         stop = min(float(p["sphere_stop_load"]), float(p["sphere_final_load"]))
         du = float(p["sphere_du_max"])
-        out.append(Case(name="hemisphere", label="3D beam under a hemisphere (half modelled)",
+        out.append(Case(name="hemisphere", label=f"3D beam under a hemisphere ({p['sphere_symmetry']} modelled)",
                         scene=partial(build_hemisphere_scene, dict(p)), schedule=ngtmc.Schedule.monotonic(stop),
                         control=ngtmc.AdaptiveStepControl(du_max=du, k_u=float(p["k_u"]),
                                                           du_min=min(float(p["du_min"]), du)),

@@ -308,10 +308,10 @@ def test_speed_error_honours_reference_case(tpb_run):
 
 
 def test_time_split_table():
-    """Each case with a recorded time split gets a row: ms per Newton iteration and the share of
-    its wall time per part, the rest as 'other'."""
+    """Each case with a recorded time split gets a row: ms per Newton iteration, its NGSolve
+    threads and the share of its wall time per part, the rest as 'other'."""
     import pandas as pd
-    meta = {"cases": [{"name": "main", "label": "main case"}],
+    meta = {"cases": [{"name": "main", "label": "main case", "threads": 2}],
             "results": {"main": {"wall_time_s": 100.0, "newton_iterations": 400, "steps": 200,
                                  "time_split_s": {"assembly": 45.0, "residual": 10.0, "factorization": 5.0,
                                                   "solve": 1.0, "line_search": 9.0, "phase_field": 2.0,
@@ -323,7 +323,7 @@ def test_time_split_table():
     rows = report.time_split_rows(meta, history, meta["cases"])
     assert len(rows) == 1
     r = rows[0]
-    assert r["ms_per_it"] == pytest.approx(250.0) and r["newton"] == 400
+    assert r["ms_per_it"] == pytest.approx(250.0) and r["newton"] == 400 and r["threads"] == 2
     assert dict(r["parts"])["assembly"] == pytest.approx(45.0)
     assert r["other"] == pytest.approx(20.0)
     meta["results"]["main"].pop("time_split_s")

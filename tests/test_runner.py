@@ -317,17 +317,34 @@ def test_checkpoint_state_by_name_and_the_positional_form_still_loads():
 
 
 def test_auto_threads_follow_the_mesh_size(monkeypatch):
-    """threads="auto" of a serial run: one NGSolve thread below AUTO_TWO_THREADS_ELEMENTS elements
-    in the largest built scene (a second thread made the quick three-point bending 1.75x slower),
-    two from there; cases whose scene is not built do not count."""
+    """threads="auto" of a serial run: per case, one NGSolve thread below AUTO_TWO_THREADS_ELEMENTS
+    elements (AUTO_TWO_THREADS_ELEMENTS_3D in 3D) in its built scene (a second thread made the
+    quick three-point bending 1.75x slower), two from there; a case whose scene is not built gets
+    one."""
     import ngtmc.runner as runner
     from ngtmc.study import study_parameters
     mod = tiny_study()
     _, p = study_parameters(mod, "quick")
     case, unbuilt = mod.cases(p)[0], mod.cases(p)[0]
     ne = case.build_scene().mesh.ne
-    assert ne < runner.AUTO_TWO_THREADS_ELEMENTS
-    assert runner.auto_threads([case, unbuilt]) == 1
+    assert case.scene.mesh.dim == 2 and ne < runner.AUTO_TWO_THREADS_ELEMENTS
+    assert runner.case_threads(case) == 1 and runner.case_threads(unbuilt) == 1
     monkeypatch.setattr(runner, "AUTO_TWO_THREADS_ELEMENTS", ne)
-    assert runner.auto_threads([case, unbuilt]) == 2
-    assert runner.auto_threads([unbuilt]) == 1
+    assert runner.case_threads(case) == 2 and runner.case_threads(unbuilt) == 1
+    monkeypatch.setattr(runner, "AUTO_TWO_THREADS_ELEMENTS_3D", 1)   # a 2D mesh ignores the 3D threshold
+    monkeypatch.setattr(runner, "AUTO_TWO_THREADS_ELEMENTS", ne + 1)
+    assert runner.case_threads(case) == 1
+
+
+def test_auto_threads_are_chosen_and_recorded_per_case(tmp_path, monkeypatch):
+    """A serial run with threads="auto" runs each case in its own TaskManager with the count
+    case_threads gives it, and records the count that was active in the case's metadata."""
+    import ngtmc.runner as runner
+    mod = tiny_study(names=("a", "b"))
+    monkeypatch.setattr(runner, "case_threads", lambda c: {"a": 2, "b": 1}[c.name])
+    out = run_study(mod, output=tmp_path / "run", report=False, progress=False)
+    meta = json.loads((out / "metadata.json").read_text())
+    assert {c["name"]: c["threads"] for c in meta["cases"]} == {"a": 2, "b": 1}
+    out = run_study(mod, output=tmp_path / "one", report=False, progress=False, threads=1)   # explicit: every case
+    meta = json.loads((out / "metadata.json").read_text())
+    assert {c["name"]: c["threads"] for c in meta["cases"]} == {"a": 1, "b": 1}

@@ -21,6 +21,9 @@ def test_the_study_is_registered_and_refuses_bad_parts():
     _, p = study_parameters(study, "quick", {"parts": "everything"})
     with pytest.raises(StudyError, match="parts"):
         study.cases(p)
+    _, p = study_parameters(study, "quick", {"sphere_symmetry": "eighth"})
+    with pytest.raises(StudyError, match="sphere_symmetry"):
+        study.cases(p)
     _, p = study_parameters(study, "quick", {"sphere_radius": 0.6})
     with pytest.raises(StudyError, match="sphere_radius"):
         study.cases(p)
@@ -42,23 +45,36 @@ def test_slab_is_the_2d_mesh_extruded():
     assert {"front", "back", "load", "support_left", "support_right"} <= set(sc3.mesh.GetBoundaries())
 
 
-def test_hemisphere_mesh_has_its_regions_volumes_and_faces():
+@pytest.mark.parametrize("symmetry", ["half", "quarter"])
+def test_hemisphere_mesh_has_its_regions_volumes_and_faces(symmetry):
+    """The half model (z >= 0) and the quarter model (also x <= L/2): volumes of the regions and
+    areas of the named faces by hand; the quarter is the half cut at the mid-span plane."""
     _, p = study_parameters(study, "quick", {"parts": "hemisphere", "sphere_h_band": 0.08, "sphere_h_void": 0.1,
-                                             "sphere_h_beam": 0.4})
+                                             "sphere_h_beam": 0.4, "sphere_symmetry": symmetry})
     sc = study.build_hemisphere_scene(p)
     m = sc.mesh
+    f = 0.5 if symmetry == "quarter" else 1.0      # the part of the half model that is modelled
     vol = {r: ngs.Integrate(1, m, definedon=m.Materials(r)) for r in set(m.GetMaterials())}
     L, H, W = 4.0, 1.0, 0.5
     R, gap, vw = 0.25, 0.025, 0.5
-    beam = L * H * W - 0.04 * 0.2 * W
+    beam = f * (L * H * W - 0.04 * 0.2 * W)
     solid = sum(vol[r] for r in ("beam", "band", "support_zone", "load_zone"))
     assert solid == pytest.approx(beam, rel=1e-9)
     quarter_ball = math.pi * R**3 / 3           # the hemisphere's half (z >= 0)
-    assert vol["indenter"] == pytest.approx(quarter_ball, rel=2e-3)   # curved to order 2
-    assert vol["void"] + vol["indenter"] == pytest.approx(2 * vw * (gap + R) * W, rel=1e-9)
-    area = {b: ngs.Integrate(1, m, definedon=m.Boundaries(b)) for b in ("load", "support_left", "support_right")}
-    assert area["load"] == pytest.approx(math.pi * R**2 / 2, rel=2e-3)
-    assert area["support_left"] == pytest.approx(0.1 * W, rel=1e-9) == area["support_right"]
+    assert vol["indenter"] == pytest.approx(f * quarter_ball, rel=2e-3)   # curved to order 2
+    assert vol["void"] + vol["indenter"] == pytest.approx(f * 2 * vw * (gap + R) * W, rel=1e-9)
+    faces = set(m.GetBoundaries())
+    area = {b: ngs.Integrate(1, m, definedon=m.Boundaries(b)) for b in faces if b}
+    assert area["load"] == pytest.approx(f * math.pi * R**2 / 2, rel=2e-3)
+    assert area["support_left"] == pytest.approx(0.1 * W, rel=1e-9)
+    assert area["sym"] == pytest.approx(f * (L * H - 0.04 * 0.2 + 2 * vw * (gap + R)), rel=1e-9)   # z = 0
+    if symmetry == "quarter":
+        assert "support_right" not in faces
+        assert area["sym_x"] == pytest.approx((H - 0.2) * W + (gap + R) * W, rel=1e-9)   # ligament and void+ball
+        assert {s.boundary for s in sc.supports} == {"support_left", "sym", "sym_x"}
+    else:
+        assert area["support_right"] == pytest.approx(0.1 * W, rel=1e-9)
+        assert "sym_x" not in faces
 
 
 def test_adjoint_in_3d_against_finite_differences():

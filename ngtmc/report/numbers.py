@@ -370,8 +370,9 @@ TIME_SPLIT_PARTS = ("assembly", "residual", "factorization", "solve", "line_sear
 
 
 def time_split_rows(meta: dict, history: pd.DataFrame, cases: list[dict]) -> list[dict]:
-    """Per case with a recorded ``time_split_s``: Newton iterations, ms per iteration and the
-    share of the case's wall time spent in each part (%), plus the rest (meshing, output, ...)."""
+    """Per case with a recorded ``time_split_s``: Newton iterations, ms per iteration, the NGSolve
+    threads it ran with (None where not recorded) and the share of the case's wall time spent in
+    each part (%), plus the rest (meshing, output, ...)."""
     rows = []
     for c in cases:
         res = (meta.get("results") or {}).get(c["name"]) or {}
@@ -382,6 +383,7 @@ def time_split_rows(meta: dict, history: pd.DataFrame, cases: list[dict]) -> lis
             continue
         parts = [(k, 100.0 * float(split.get(k, 0.0)) / float(wall)) for k in TIME_SPLIT_PARTS]
         rows.append({"label": c["label"], "newton": int(its), "ms_per_it": 1000.0 * float(wall) / int(its),
+                     "threads": c.get("threads"),
                      "wall_time_s": float(wall), "parts": parts, "other": max(0.0, 100.0 - sum(v for _, v in parts))})
     return rows
 

@@ -85,7 +85,7 @@ def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Pa
     return max(cands, key=lambda d: d.stat().st_mtime) if cands else None
 
 
-#: A serial run uses two NGSolve threads only from this many elements in its largest case mesh.
+#: A serial case runs with two NGSolve threads only from this many elements in its mesh.
 #: Measured on the 2-core machine, idle, three-point bending to 0.1 mm (path following, same 94
 #: steps and 459 Newton iterations): quick mesh (8632 elements) 97.7 s with one thread against
 #: 170.5 s with two (the sparse factorization and the block-GMRES solves of a small matrix pay
@@ -93,13 +93,23 @@ def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Pa
 #: with two threads (idle) against 839 with one (beside another one-thread job).
 AUTO_TWO_THREADS_ELEMENTS = 20000
 
+#: The same threshold for 3D meshes, whose tangents have several times the nonzeros per row.
+#: Measured 2026-12-02 on the quarter hemisphere of the 3D study at quick (10896 tetrahedra,
+#: 19536 displacement dofs, the same 59 steps and 461 Newton iterations): the peak reached after
+#: 146 s with one thread and 91 s with two, 0.08 mm after 453 and 319 s (docs/three-d.md).
+AUTO_TWO_THREADS_ELEMENTS_3D = 10000
 
-def auto_threads(cases) -> int:
-    """NGSolve threads of a serial run with ``threads="auto"``: 2 if the largest mesh of the
-    cases' (already built) scenes has at least AUTO_TWO_THREADS_ELEMENTS elements, else 1."""
+
+def case_threads(case) -> int:
+    """NGSolve threads of a serial case with ``threads="auto"``: 2 if its (already built) scene's
+    mesh has at least AUTO_TWO_THREADS_ELEMENTS elements (AUTO_TWO_THREADS_ELEMENTS_3D in 3D),
+    else 1 (also for a case whose scene is not built)."""
     from ..scene import Scene
-    sizes = [c.scene.mesh.ne for c in cases if isinstance(getattr(c, "scene", None), Scene)]
-    return 2 if sizes and max(sizes) >= AUTO_TWO_THREADS_ELEMENTS else 1
+    scene = getattr(case, "scene", None)
+    if not isinstance(scene, Scene):
+        return 1
+    limit = AUTO_TWO_THREADS_ELEMENTS_3D if scene.mesh.dim == 3 else AUTO_TWO_THREADS_ELEMENTS
+    return 2 if scene.mesh.ne >= limit else 1
 
 
 def run_study(name: str | ModuleType, resolution: str | None = None, output: str | Path | None = None,
@@ -134,8 +144,10 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
         (with its ``case``).
     threads : int, None or "auto"
         ``ngsolve.SetNumThreads`` (an integer >= 1); the run is inside ``ngsolve.TaskManager()``.
-        None: leave as is. "auto" (default): :func:`auto_threads` (2 from AUTO_TWO_THREADS_ELEMENTS
-        elements, else 1), or 1 per worker when the cases run on a cluster.
+        None: leave as is. "auto" (default): per case, :func:`case_threads` (2 from
+        AUTO_TWO_THREADS_ELEMENTS elements, AUTO_TWO_THREADS_ELEMENTS_3D in 3D, else 1; each case in
+        its own TaskManager, the count recorded in the case's metadata), or 1 per worker when the
+        cases run on a cluster.
     checkpoint_every, checkpoint_seconds : checkpoint period in accepted steps and seconds.
     vtk : bool
         Write the ParaView series into ``vtk/``.
@@ -248,8 +260,9 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
             run.prepare_resume(meta)
         run.validate()     # bad input is refused here, before any folder is created or any step solved
         import ngsolve as ngs
-        if auto and not parallel:
-            threads = auto_threads(run.cases)
+        per_case = auto and not parallel and comm is None
+        if per_case:   # each case's count follows its mesh (run_cases enters a TaskManager per case)
+            run.case_threads = case_threads
         if comm is not None:
             threads = 1  # one thread per rank
         if threads:
@@ -262,7 +275,7 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
             from .parallel import ParallelCases
             run_cases = ParallelCases(run, workers, scheduler, threads)
         try:
-            with _terminate_as_interrupt(), ngs.TaskManager():
+            with _terminate_as_interrupt(), (contextlib.nullcontext() if per_case else ngs.TaskManager()):
                 run.run(resume, meta, run_cases)
         except BaseException:
             # a failed or interrupted run still gets its report (with a status banner): nothing is lost

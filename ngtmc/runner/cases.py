@@ -13,7 +13,7 @@ import pandas as pd
 from ..plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput
 from ..snapshots import Snapshots
 from ..study import Case, StudyError
-from .folder import _CONTROL_SETTINGS, RunFolder, _mesh_info, case_results
+from .folder import _CONTROL_SETTINGS, RunFolder, _mesh_info, _threads, case_results
 
 __all__ = ["_Run"]
 
@@ -35,6 +35,9 @@ class _Run(RunFolder):
         self.progress = Progress(progress, f"[ngtmc {mod.NAME}]")
         self.simulations: dict = {}             # case -> the Simulation that computed it in this process
         self.resume_from: dict[str, dict] = {}   # case -> checkpoint to continue from (see prepare_resume)
+        #: case -> NGSolve threads for that case, each case then in its own TaskManager (threads="auto"
+        #: of a serial run: :func:`ngtmc.runner.case_threads`); None: the caller's setting for all
+        self.case_threads = None
 
     # ------------------------------------------------------------ resume
     def adopt(self, case: Case, ck: dict):
@@ -171,15 +174,16 @@ class _Run(RunFolder):
         mesh_info["dim"] = scene.dim
         if self.mesh is None:
             self.mesh = dict(mesh_info)
-        cm = {"mesh": {k_: v for k_, v in mesh_info.items() if k_ != "dim"}, "setup_time_s": build_time}
+        cm = {"mesh": {k_: v for k_, v in mesh_info.items() if k_ != "dim"}, "setup_time_s": build_time,
+              "threads": _threads()}
         if self.force_unit is None:
             self.force_unit = sim.force_unit
             self.thickness = scene.thickness
         for key, has in (("fracture", scene.has_fracture), ("void", scene.has_void),
                          ("regulariser", scene.regulariser is not None)):
             self.features[key] = bool(self.features.get(key, False) or has)
-        if case.control is not None:
-            cm["control"] = {a: getattr(case.control, a) for a in _CONTROL_SETTINGS if hasattr(case.control, a)}
+        # the control the run uses (path following bounds its displacement steps by its own du_max)
+        cm["control"] = {a: getattr(sim.control, a) for a in _CONTROL_SETTINGS if hasattr(sim.control, a)}
         cm["schedule"] = [float(x) for x in sim.schedule.points]
         cm["options"] = {k_: v for k_, v in (case.options or {}).items() if isinstance(v, (int, float, str, bool))}
         self.case_meta[case.name] = cm
@@ -270,7 +274,14 @@ class _Run(RunFolder):
     def run_cases(self, resume: bool):
         """Compute the cases one after the other in this process (the first failure stops the run)."""
         for k, case in enumerate(self.cases):
-            self.run_case(k, case, resume)
+            n = self.case_threads(case) if self.case_threads is not None else None
+            if n is None:   # the caller's TaskManager (or none)
+                self.run_case(k, case, resume)
+                continue
+            import ngsolve as ngs
+            ngs.SetNumThreads(int(n))
+            with ngs.TaskManager():
+                self.run_case(k, case, resume)
 
     def run(self, resume: bool, meta: dict | None = None, run_cases=None):
         """Compute every case not taken over by :meth:`prepare_resume`; ``meta``: the recorded
