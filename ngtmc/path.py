@@ -137,8 +137,11 @@ class DissipationPath:
         the steps of its 2D twin times its thickness; tests/test_extrude.py).
     """
 
-    def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None):
+    def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
+                 growth_ceiling: bool = True):
         self.sim = sim
+        #: whether a cut-back sets a ceiling on the growth of dD (GROWTH_CEILING_STEPS)
+        self.growth_ceiling = bool(growth_ceiling)
         self.coupled = c = sim.coupled
         s = sim.solver
         if crack_advance is None:
@@ -290,7 +293,7 @@ class DissipationPath:
         """Instead of a dissipation step: from the state ``saved`` (the last accepted one), a
         displacement step to the load of pseudo-time ``t_new``; returns (ok, info) as :meth:`attempt`."""
         self.sim.solver.set_state(saved)
-        ok, info = self._fixed(self.sim.schedule.load(t_new), info)
+        ok, info = self._fixed(self.sim.schedule.load(t_new), info, fallback=True)
         if ok:
             info["t_new"] = t_new
         return ok, info
@@ -358,10 +361,15 @@ class DissipationPath:
         info["message"] = f"dissipation step of {self._last_dD:.4g} N mm on the refined mesh: {r.message}"
         return False, info
 
-    def _fixed(self, load: float, info: dict):
+    def _fixed(self, load: float, info: dict, fallback: bool = False):
         """Displacement step: a predictor (the secant through the last two accepted states, else
-        the u solve with alpha_{n-1}), then the coupled Newton at ``load``."""
+        the u solve with alpha_{n-1}), then the coupled Newton at ``load``. With ``fallback``
+        (a displacement step taken instead of a dissipation step, where no dissipation step is
+        left to try), where the coupled Newton fails the monolithic scheme's fallback follows
+        (``coupled["fallback"]``, default converged staggered passes at ``load``;
+        :meth:`ngtmc.schemes.StepSchemes._coupled_or_fallback`)."""
         sim, s = self.sim, self.sim.solver
+        saved = s.get_state() if fallback and sim.fallback == "single-pass" else None
         dl = self.load_n - self.load_prev if self.x_prev is not None else 0.0
         if not (dl != 0.0 and self._secant((load - self.load_n) / dl, load) is not None):
             res = s.solve_displacement(load)
@@ -369,6 +377,8 @@ class DissipationPath:
             if not res.converged:
                 info["message"] = res.message
                 return False, info
+        if fallback:
+            return sim._coupled_or_fallback(load, info, saved)
         return sim._coupled_newton(load, info)
 
     def _secant(self, ratio: float, load: float | None = None):
@@ -405,9 +415,11 @@ class DissipationPath:
         and the last two states of the secant predictor."""
         s = self.sim.solver
         forward = (s.load - self.load_n) * self._direction() > 0
+        if not self.growth_ceiling:   # also a ceiling restored from a checkpoint of a run that had one
+            self.ceiling, self.at_ceiling = GROWTH_MAX, 0
         if self._last_kind != "dissipation":
             self.growth = GROWTH_START
-        elif cutbacks:
+        elif cutbacks and self.growth_ceiling:
             # the factor at which the step converged after its cut-backs
             tried = self._factor_tried if self._factor_tried is not None else self.factor
             self.ceiling = max(CEILING_MIN, tried)

@@ -67,6 +67,9 @@ class StepSchemes:
             raise ValueError(f"coupled path = {self.path!r} is not one of None (load control), 'dissipation'")
         self.crack_advance = copt.pop("crack_advance", None)
         self.crack_front = copt.pop("crack_front", None)
+        self.growth_ceiling = copt.pop("growth_ceiling", True)
+        if not isinstance(self.growth_ceiling, bool):
+            raise ValueError(f"coupled growth_ceiling = {self.growth_ceiling!r} must be True or False")
         if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
             raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
                              "(in 2D the dissipation is per mm of thickness)")
@@ -80,7 +83,7 @@ class StepSchemes:
         self._path = None
         if self.coupled is not None and self.path == "dissipation":
             from .path import DissipationPath
-            self._path = DissipationPath(self, self.crack_advance, self.crack_front)
+            self._path = DissipationPath(self, self.crack_advance, self.crack_front, self.growth_ceiling)
             # a displacement step of the monolithic scheme carries no lag, so its size does not set
             # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
             # by the du_max of the lagged schemes' Eq. 20
@@ -210,6 +213,15 @@ class StepSchemes:
         if not res.converged:
             info["message"] = res.message
             return False, info
+        return self._coupled_or_fallback(load, info, saved)
+
+    def _coupled_or_fallback(self, load: float, info: dict, saved: dict | None):
+        """The coupled Newton at the fixed ``load`` from the current (predicted) state and, where
+        it fails, the fallback of ``coupled["fallback"]`` (:meth:`_attempt_monolithic`); ``saved``: the
+        state before the step, which the "single-pass" fallback starts from. The one owner of the
+        fallback policy: the monolithic scheme's steps and path following's displacement steps
+        (:meth:`ngtmc.path.DissipationPath._fixed`) both end here."""
+        s = self.solver
         ok, info = self._coupled_newton(load, info)
         if ok:
             return True, info

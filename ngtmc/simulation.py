@@ -92,14 +92,17 @@ class Simulation(StepSchemes):
     coupled : dict, optional
         Options of the "monolithic" scheme: ``alpha_tol``, ``max_iterations``, ``linear_solver``
         of :class:`ngtmc.coupled.CoupledNewton`; ``fallback`` ("single-pass", "capped" or
-        "staggered", see ``_attempt_monolithic``); ``damage_cap`` (default 0.25) and
+        "staggered", where the coupled Newton fails at a fixed load: the monolithic scheme's steps
+        and path following's displacement steps taken instead of a dissipation step; see
+        ``StepSchemes._attempt_monolithic``); ``damage_cap`` (default 0.25) and
         ``max_substeps`` (default 200) of its capped sub-steps; ``fallback_passes`` (default 400)
-        and ``newton_every`` (default 10) of its staggered fallback (see ``_attempt_monolithic``);
+        and ``newton_every`` (default 10) of its staggered fallback;
         ``path`` (None, or "dissipation" for path following, the default of
         ``scheme="path-following"``), ``crack_advance`` (mm per dissipation step, default the
         mean l0 of the fracture regions) and, in 3D, ``crack_front`` (mm, the length of the crack
         front that advances; default the thinnest side of the fracture regions' bounding box;
-        :mod:`ngtmc.path`).
+        :mod:`ngtmc.path`), ``growth_ceiling`` (default True: a cut-back of a dissipation step
+        caps the growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`).
     newton : NewtonOptions, optional
     progress : bool or callable
         True prints a progress line to stderr about every 5 s (:class:`ngtmc.plugins.Progress`, the

@@ -86,7 +86,32 @@ def test_path_following_passes_the_snap_back_in_few_steps():
         assert np.all(H1 >= H0) and np.all(a1 >= a0)
 
 
+def test_without_the_growth_ceiling_a_cut_back_sets_none():
+    """coupled={"growth_ceiling": False}: a cut-back sets no ceiling; the growth factor is kept (the
+    step control's halved scale alone shrinks the next steps until it recovers) and easy steps
+    double it as before (the L-panel's long crack run, docs/performance.md)."""
+    from ngtmc.path import GROWTH_MAX
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following", coupled={"growth_ceiling": False})
+    path, s = sim._path, sim.solver
+    assert path.growth_ceiling is False
+
+    def step(iterations, cutbacks=0, converged_at=None):
+        path._last_kind = "dissipation"
+        path._factor_tried = converged_at if converged_at is not None else path.factor
+        s.load = path.load_n + 1e-5
+        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
+        return path.growth
+
+    path.growth = 1.0
+    assert step(20, cutbacks=1, converged_at=0.5) == 1.0        # not lowered to 0.5, no ceiling
+    assert path.ceiling == GROWTH_MAX
+    assert [step(4) for _ in range(4)] == [2.0, 4.0, 8.0, GROWTH_MAX]
+
+
 def test_path_options_are_checked():
+    with pytest.raises(ValueError, match="growth_ceiling"):
+        ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"growth_ceiling": "no"})
     with pytest.raises(ValueError, match="path"):
         ngtmc.Simulation(_plate(), 0.01, scheme="monolithic", coupled={"path": "arc-length"})
     with pytest.raises(ValueError, match="crack_advance"):
@@ -322,3 +347,35 @@ def test_path_following_takes_a_displacement_step_where_the_damage_does_not_resp
     _failing_dissipation(b, unresponsive=False)
     with pytest.raises(ngtmc.StepFailure, match="made to fail"):
         b.run()
+
+
+def test_a_displacement_step_that_the_coupled_newton_cannot_close_falls_back_to_staggered_passes(monkeypatch):
+    """Path following's displacement steps taken instead of a dissipation step end, where the
+    coupled Newton fails, in the monolithic scheme's fallback (coupled["fallback"], default
+    converged staggered passes at that load): the step is closed, in equilibrium, with
+    staggered_iterations > 0 (which the adjoint refuses). The probing displacement step before a
+    dissipation step has no fallback: there the dissipation step follows. Here the coupled Newton
+    is made to fail on the notched plate before its crack runs, where the staggered passes
+    converge in a few passes."""
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    for _ in range(3):
+        sim.advance()
+    path, s = sim._path, sim.solver
+    saved = s.get_state()
+    load = path.load_n + 1e-3
+
+    def fail(load, info, alpha_upper=None):
+        info["message"] = "made to fail"
+        return False, info
+
+    monkeypatch.setattr(sim, "_coupled_newton", fail)
+    info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0, "projected": 0}
+    ok, out = path._fixed(load, dict(info))
+    assert not ok and out["message"] == "made to fail"
+    s.set_state(saved)
+    ok, out = path._fixed(load, dict(info), fallback=True)
+    assert ok and out["staggered_iterations"] >= 1
+    assert s.load == pytest.approx(load)
+    again = s.solve_displacement(load)                  # u is in equilibrium at that load and alpha
+    assert again.converged and again.iterations == 0
