@@ -116,7 +116,8 @@ SUMMARY = (
     "(a) The three-point bending of the 2D study (indenter, third-medium void, crack) extruded into one "
     "layer of prisms with u_z held on both faces (plane strain), against the same mesh in 2D: the 3D "
     "energy, regulariser, split and reaction against the 2D ones. (b) A notched 4 x 1 x 1 mm beam "
-    "indented by a hemisphere across a 0.025 mm void gap (half the beam modelled, symmetry at z = 0): "
+    "indented by a hemisphere across a 0.025 mm void gap (a quarter of the beam modelled by default, "
+    "symmetry at z = 0 and at mid-span; the force is the modelled part's): "
     "a point-like load, a disc-shaped contact patch and a crack front that curves across the width."
 )
 
@@ -131,7 +132,7 @@ PARAMETERS = {
                                         "force is that of the modelled part"),
     "sphere_beam_length": (4.0, "mm", "beam length (half the 2D beam's)"),
     "sphere_beam_height": (1.0, "mm", "beam height"),
-    "sphere_beam_width": (1.0, "mm", "beam width (the half z in [0, width/2] is modelled)"),
+    "sphere_beam_width": (1.0, "mm", "beam width (z in [0, width/2] is modelled)"),
     "sphere_notch_depth": (0.2, "mm", "notch depth at mid-span, across the whole width"),
     "sphere_notch_width": (0.04, "mm", "notch width (flat tip)"),
     "sphere_radius": (0.25, "mm", "hemisphere radius"),
