@@ -29,7 +29,10 @@ applied: it bounds the dissipation per step, which the path now does itself):
    attempt of a step (du below 2 du_min, so the run would fail) whose dissipation solve failed
    after its Newton iteration asked to move the load by more than LOAD_STEP_LIMIT times the
    length of the schedule's segment (the damage hardly responds to the load: the crack has
-   arrested).
+   arrested), and so is the last attempt of any step whose dissipation solve stalled at every dD.
+   A displacement step taken instead of a dissipation step ends, where its coupled Newton fails,
+   in the monolithic scheme's fallback (``coupled["fallback"]``, default converged staggered
+   passes at that load; such steps carry ``staggered_iterations`` > 0).
 4. On a new segment of the schedule (after a turning point) the rule starts afresh: rate 0,
    displacement steps first (an unloading segment does not dissipate).
 5. After a dissipation step the next step is a dissipation step too (no displacement attempt:
@@ -286,7 +289,18 @@ class DissipationPath:
         if past_end:
             # the dissipation dD is not reached on this segment: a displacement step to its end
             return self._displacement_step(saved, t1, info)
-        info["message"] = f"dissipation step of {dD:.4g} N mm: {r.message}"
+        message = f"dissipation step of {dD:.4g} N mm: {r.message}"
+        if du < 2.0 * sim.control.du_min:
+            # the step's last attempt before the run would fail at du_min (the dissipation step
+            # stalled at every dD): a displacement step of du, with the fallback of the monolithic
+            # scheme where its coupled Newton stalls too
+            ok, info = self._displacement_step(saved, t_new, info)
+            if ok:
+                self.dissipating = False
+                return True, info
+            info["message"] = f"{message}; then a displacement step: {info.get('message', '')}"
+            return False, info
+        info["message"] = message
         return False, info
 
     def _displacement_step(self, saved: dict, t_new: float, info: dict):

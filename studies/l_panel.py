@@ -109,7 +109,12 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   the cause is the ceiling on the growth of the dissipation step after a cut-back (commit
   32c1e15: 155 -> 283 steps, 677 -> 1048 iterations, the same peak), which holds the crack run's
   steps small; switched off on today's code, the run stalls at 6.2986 mm instead
-  (docs/performance.md, "Which change doubled the quick L-panel's steps").
+  (docs/performance.md, "Which change doubled the quick L-panel's steps"). Since the evening of
+  2026-12-02 path following's displacement steps fall back to staggered passes where the coupled
+  Newton stalls, and the study runs path following without the ceiling and with du_min at most
+  1e-6 mm (``_options``, ``PATH_FOLLOWING_DU_MIN``): quick, monotonic 126 steps and 868
+  iterations (peak 18.62 kN at 6.306 mm), cyclic 152 steps and 678 iterations (reload peak
+  18.60 kN at 6.311 mm), the same peaks.
 * At u = l_h the force is 4.8 kN on first loading (not "about zero": the third medium between the
   curved indenter and the arm is squeezed over some 20 mm and carries load from about 5.8 mm on;
   approach-only runs gave F(6.0) = 5.4 kN with 2.5 mm void elements and 4.8 kN with 0.5 mm ones at
@@ -259,7 +264,8 @@ RESOLUTION_PARAMETERS = {
     "h_void": ("mm", "element size in the void and the indenter"),
     "h_far": ("mm", "element size elsewhere in the panel"),
     "du_max": ("mm", "largest load increment (Eq. 20)"),
-    "du_min": ("mm", "floor of Eq. 20 and smallest increment on cut-back (paper, three-point bending: 1e-8)"),
+    "du_min": ("mm", "floor of Eq. 20 and smallest increment on cut-back (paper, three-point bending: 1e-8); under "
+                      "path following at most 1e-6 (the floor of its cut-backs only)"),
 }
 DEFAULT_RESOLUTION = "quick"
 
@@ -298,6 +304,15 @@ MEASURED = {
                              "monotonic_newton_iterations": 676, "main_steps": 169, "main_newton_iterations": 762,
                              "first_loading_peak_force": 18079, "reload_peak_force": 18598, "reload_peak_load": 6.311,
                              "wall_time_s": 535, "status": "completed"},
+    "quick_path_following_no_ceiling": {"note": "ngtmc run l-panel --set scheme=path-following --workers 2, both "
+                                                "cases (2026-12-02 evening): no growth ceiling, du_min 1e-6 mm, "
+                                                "the fallback of displacement steps (docs/performance.md)",
+                                        "main_steps": 152, "main_newton_iterations": 678, "main_cutbacks": 9,
+                                        "reload_peak_force": 18597.5, "reload_peak_load": 6.3108,
+                                        "monotonic_steps": 129, "monotonic_newton_iterations": 654,
+                                        "monotonic_cutbacks": 13, "monotonic_peak_force": 18620.7,
+                                        "monotonic_peak_load": 6.3064, "main_wall_time_s": 217,
+                                        "monotonic_wall_time_s": 230, "status": "completed"},
     "quick_path_following_2026_12_02": {"note": "--set scheme=path-following --workers 2, both cases, idle machine "
                                                 "(2026-12-02, commit 2333a3a). The monotonic case had failed at "
                                                 "6.284 mm where its crack arrested (a bordered Newton step asking "
@@ -522,15 +537,24 @@ def _load_cases(p: dict) -> tuple:
     return LOAD_CASES[mode]
 
 
+#: du_min under path following, mm, at most: there dissipation sets the steps of the crack run,
+#: and du_min is only the floor of the cut-backs of a step. The quick resolution's 0.005 mm (a
+#: floor for the single-pass scheme's Eq. 20) allowed three halvings of a dissipation step: the
+#: cyclic case without the growth ceiling failed at 6.468 mm; with 1e-6 it completes (measured
+#: 2026-12-02, docs/performance.md).
+PATH_FOLLOWING_DU_MIN = 1e-6
+
+
 def _options(p: dict) -> dict:
     """Simulation options of both cases: the solver settings, and under path following no ceiling
     on the growth of the dissipation per step after a cut-back (``coupled={"growth_ceiling":
     False}``, :data:`ngtmc.path.GROWTH_CEILING_STEPS`). The ceiling saves the three-point
     bending's post-failure tail about a third of its Newton iterations; the L-panel's long crack
     run it slows down: quick, case monotonic, 126 instead of 370 steps and 868 instead of 1242
-    Newton iterations without it, the same peak (docs/performance.md). The stalls that made the
-    ceiling necessary here end in a displacement step with staggered passes (path following's
-    fallback)."""
+    Newton iterations without it, the same peak; the cyclic case 152 instead of 294 steps and 678
+    instead of 978 iterations, with du_min at most PATH_FOLLOWING_DU_MIN (docs/performance.md).
+    The stalls that made the ceiling necessary here end in a displacement step with staggered
+    passes (path following's fallback)."""
     opts = simulation_options(p)
     if opts["scheme"] == "path-following":
         opts["coupled"] = {"growth_ceiling": False}
@@ -542,7 +566,10 @@ def cases(p: dict) -> list[Case]:
     ``monotonic_to`` (past the first-loading peak). ``load_cases`` selects them."""
     du_max = float(p["du_max"])
     shift = float(p["gap"]) - effective_gap(p)
-    control = ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=min(float(p["du_min"]), du_max))
+    du_min = min(float(p["du_min"]), du_max)
+    if p.get("scheme", SOLVER_PARAMETERS["scheme"][0]) == "path-following":   # the floor of its cut-backs only (see _options)
+        du_min = min(du_min, PATH_FOLLOWING_DU_MIN)
+    control = ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=du_min)
     which = _load_cases(p)
     out = []
     if "main" in which:

@@ -326,11 +326,11 @@ def _failing_dissipation(sim, unresponsive: bool):
 
 
 def test_path_following_takes_a_displacement_step_where_the_damage_does_not_respond():
-    """Where the last attempt of a step (du < 2 du_min) fails as a dissipation step whose Newton
-    iteration asked for too large a load step, the step becomes a displacement step of du (rule 3
-    of ngtmc.path): with every dissipation solve failing so, the run goes on by displacement steps
-    alone (to 0.0055 mm, before the snap-back, which fixed-load steps cannot pass); with the same
-    failures not flagged, it fails at du_min as before."""
+    """Where the last attempt of a step (du < 2 du_min) fails as a dissipation step, the step
+    becomes a displacement step of du (rule 3 of ngtmc.path), whether or not the Newton iteration
+    asked for too large a load step: with every dissipation solve failing, the run goes on by
+    displacement steps alone (to 0.0055 mm, before the snap-back, which fixed-load steps cannot
+    pass); where that displacement step fails too, the run fails at du_min with both messages."""
     def sim():
         return ngtmc.Simulation(_plate(), 0.0055, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=0.6e-3),
                                 scheme="path-following")
@@ -343,10 +343,22 @@ def test_path_following_takes_a_displacement_step_where_the_damage_does_not_resp
     assert a._path.dissipation_steps == 0
     assert h["load"].iloc[-1] == pytest.approx(0.0055)
     assert np.all(np.diff(h["load"].to_numpy()) > 0)
+    # not flagged: the last attempt of a step is a displacement step as well (its fallback where
+    # the coupled Newton fails), so the run goes on the same way
     b = sim()
     _failing_dissipation(b, unresponsive=False)
-    with pytest.raises(ngtmc.StepFailure, match="made to fail"):
-        b.run()
+    hb = b.run().history
+    assert b._path.dissipation_steps == 0 and hb["load"].iloc[-1] == pytest.approx(0.0055)
+    # where that displacement step fails too, the run fails at du_min and says both
+    c = sim()
+    _failing_dissipation(c, unresponsive=False)
+
+    def no_displacement_step(saved, t_new, info):
+        info["message"] = "displacement step made to fail"
+        return False, info
+    c._path._displacement_step = no_displacement_step
+    with pytest.raises(ngtmc.StepFailure, match="made to fail; then a displacement step: displacement step made to fail"):
+        c.run()
 
 
 def test_a_displacement_step_that_the_coupled_newton_cannot_close_falls_back_to_staggered_passes(monkeypatch):
