@@ -30,8 +30,8 @@ applied: it bounds the dissipation per step, which the path now does itself):
    after its Newton iteration asked to move the load by more than LOAD_STEP_LIMIT times the
    length of the schedule's segment (the damage hardly responds to the load: the crack has
    arrested), and so is the last attempt of any step whose dissipation solve stalled at every dD.
-   A displacement step taken instead of a dissipation step ends, where its coupled Newton fails,
-   in the monolithic scheme's fallback (``coupled["fallback"]``, default converged staggered
+   On a step's last attempt, a displacement step taken instead of a dissipation step ends, where
+   its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``, default converged staggered
    passes at that load; such steps carry ``staggered_iterations`` > 0).
 4. On a new segment of the schedule (after a turning point) the rule starts afresh: rate 0,
    displacement steps first (an unloading segment does not dissipate).
@@ -305,9 +305,14 @@ class DissipationPath:
 
     def _displacement_step(self, saved: dict, t_new: float, info: dict):
         """Instead of a dissipation step: from the state ``saved`` (the last accepted one), a
-        displacement step to the load of pseudo-time ``t_new``; returns (ok, info) as :meth:`attempt`."""
+        displacement step to the load of pseudo-time ``t_new``; returns (ok, info) as :meth:`attempt`.
+        Only on the step's last attempt (its increment below 2 du_min, so that the run would fail
+        next) does a failing coupled Newton end in the fallback: before that a cut-back retries
+        the step with the coupled Newton alone, so that steps stay differentiable where they can."""
+        sim = self.sim
         self.sim.solver.set_state(saved)
-        ok, info = self._fixed(self.sim.schedule.load(t_new), info, fallback=True)
+        last = abs(sim.schedule.load(t_new) - sim.schedule.load(sim.t)) < 2.0 * sim.control.du_min
+        ok, info = self._fixed(self.sim.schedule.load(t_new), info, fallback=last)
         if ok:
             info["t_new"] = t_new
         return ok, info

@@ -553,8 +553,8 @@ def _options(p: dict) -> dict:
     run it slows down: quick, case monotonic, 126 instead of 370 steps and 868 instead of 1242
     Newton iterations without it, the same peak; the cyclic case 152 instead of 294 steps and 678
     instead of 978 iterations, with du_min at most PATH_FOLLOWING_DU_MIN (docs/performance.md).
-    The stalls that made the ceiling necessary here end in a displacement step with staggered
-    passes (path following's fallback)."""
+    Where a stall would still fail a step, its last attempt is a displacement step with staggered
+    passes (path following's fallback); the quick run of both cases needed none."""
     opts = simulation_options(p)
     if opts["scheme"] == "path-following":
         opts["coupled"] = {"growth_ceiling": False}
