@@ -31,8 +31,9 @@ applied: it bounds the dissipation per step, which the path now does itself):
    length of the schedule's segment (the damage hardly responds to the load: the crack has
    arrested), and so is the last attempt of any step whose dissipation solve stalled at every dD.
    On a step's last attempt, a displacement step taken instead of a dissipation step ends, where
-   its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``, default converged staggered
-   passes at that load; such steps carry ``staggered_iterations`` > 0).
+   its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``,
+   default converged staggered passes at that load; such steps carry ``staggered_iterations``
+   > 0).
 4. On a new segment of the schedule (after a turning point) the rule starts afresh: rate 0,
    displacement steps first (an unloading segment does not dissipate).
 5. After a dissipation step the next step is a dissipation step too (no displacement attempt:
