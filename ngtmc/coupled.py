@@ -253,7 +253,7 @@ class CoupledNewton:
 
     # ------------------------------------------------------------------ solve
     def solve(self, load: float, alpha_upper: np.ndarray | None = None, dissipation: float | None = None,
-              load_bounds: tuple[float, float] | None = None, max_load_step: float | None = None) -> NewtonResult:
+              load_bounds: tuple[float, float] | None = None) -> NewtonResult:
         """Solve step ``load`` (imposed displacement, mm) from the current (u, alpha).
 
         ``alpha_upper``: upper bounds of alpha per dof (default 1). A bound below 1 caps the damage
@@ -271,14 +271,7 @@ class CoupledNewton:
         x = a + dlambda b, with b the response to a unit load change, and dlambda from the
         linearised constraint. The converged load is :attr:`load_solved` (mm); it may be below
         the load of the last step (a snap-back). ``load_bounds`` (mm): the load must stay in this
-        interval (else the solve fails). ``max_load_step`` (mm): a solve that fails after a Newton
-        step asked to move the load by more than this sets :attr:`load_unresponsive` (the damage
-        hardly responds to the load there, so the bordered step's load change, the constraint
-        residual divided by dD/d(load), is meaningless: 5e11 mm was seen in the quick L-panel's
-        crack run, where every such step inverted an element at any line-search length). Solves
-        that converge are not affected: the first iterations of a snap may ask for a load change
-        larger than the whole schedule, which the line search shortens (up to 30 times the
-        schedule in the notched plate's snap)."""
+        interval (else the solve fails)."""
         s = self.s
         tm = s.timings
         nu = self.nu
@@ -292,7 +285,6 @@ class CoupledNewton:
         a_up = np.ones_like(a_low) if alpha_upper is None else np.maximum(np.minimum(alpha_upper, 1.0), a_low)
         self.cap_binding = False
         self.load_out_of_bounds = None
-        self.load_unresponsive = False
         c = self._ncp_scale
         dir_u = s._dir_np
         path = dissipation is not None
@@ -338,11 +330,7 @@ class CoupledNewton:
             the dissipation step."""
             return (ru / scale_u) ** 2 + (ra / self.alpha_residual_scale) ** 2 + ((gv / scale_g) ** 2 if path else 0.0)
 
-        far = {"seen": False}  # a Newton step asked to move the load beyond max_load_step
-
         def failed(it, message):
-            if far["seen"]:
-                self.load_unresponsive = True
             self._scatter()
             return NewtonResult(False, it, res_u, solve_time, assembly_time, 0, message)
 
@@ -408,13 +396,8 @@ class CoupledNewton:
                 grad = self.D.gradient(a_cur)
                 slope = ranks.sum(float(grad @ bN[nu:]))
                 if not abs(slope) > 0.0:
-                    self.load_unresponsive = True
                     return None
                 dlam = -(g + ranks.sum(float(grad @ dxN[nu:]))) / slope
-                if max_load_step is not None and not abs(dlam) <= max_load_step:
-                    if _DEBUG:
-                        print(f"    load step {dlam:.3e} mm beyond {max_load_step:.3e} mm", flush=True)
-                    far["seen"] = True
                 dxN += dlam * bN
             return dxN, dlam
 

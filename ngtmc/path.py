@@ -26,10 +26,13 @@ applied: it bounds the dissipation per step, which the path now does itself):
 3. A dissipation step that moves the load by more than du_max is solved again with the
    dissipation scaled down in proportion (0.9 du_max / |load change|); if the load still moves
    too far, the crack has stopped and the step is a displacement step of du. So is the last
-   attempt of a step (du below 2 du_min, so the run would fail) whose dissipation solve failed
-   after its Newton iteration asked to move the load by more than LOAD_STEP_LIMIT times the
-   length of the schedule's segment (the damage hardly responds to the load: the crack has
-   arrested), and so is the last attempt of any step whose dissipation solve stalled at every dD.
+   attempt of a step (du below 2 du_min, so the run would fail) whose dissipation solve failed,
+   whether the crack has arrested (the damage no longer responds to the load: the quick L-panel's
+   bordered Newton step asked for a load change of 5e11 mm there) or the solve stalled at every
+   dD (the paper L-panel at 6.2078 mm). Only the last attempt: turning every failed dissipation
+   solve that asked for a large load change into a displacement step turned legitimate snaps,
+   where cut-backs of dD converge, into displacement steps, and the notched plate's 2D and 3D
+   twins then broke along different paths (tests/test_extrude.py).
    On a step's last attempt, a displacement step taken instead of a dissipation step ends, where
    its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``,
    default converged staggered passes at that load; such steps carry ``staggered_iterations``
@@ -110,19 +113,6 @@ CEILING_MIN = 0.5
 #: hemisphere; docs/three-d.md).
 SECANT_DAMPING = (1.0, 0.5, 0.25)
 
-#: A dissipation step that fails after a Newton iteration asked to move the load by more than
-#: LOAD_STEP_LIMIT times the length of the schedule's segment becomes a displacement step (rule 3
-#: of the module docstring): the damage does not respond to the load there. The quick L-panel's
-#: crack run arrested at 6.284 mm, where the bordered step asked for a load change of 5e11 mm,
-#: inverted elements at every line-search length, and the run failed at the minimum step.
-#: Only the last attempt of a step is turned into a displacement step: refusing such steps
-#: whenever they appeared (with a bound of 10 du_max, or of the segment's length), or whenever
-#: such a solve failed, turned legitimate snaps into displacement steps where cut-backs of dD
-#: would have converged: the notched plate's 2D and 3D twins then broke along different paths
-#: (tests/test_extrude.py; its snaps asked for up to 30 times the segment in early iterations).
-LOAD_STEP_LIMIT = 1.0
-
-
 class DissipationPath:
     """Step rule of the path-following monolithic scheme (module docstring) for a
     :class:`ngtmc.simulation.Simulation`.
@@ -142,10 +132,14 @@ class DissipationPath:
     """
 
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
-                 growth_ceiling: bool = True):
+                 growth_ceiling: bool = True, snapback_growth: float = 1.0, easy_recovery: bool = False):
         self.sim = sim
         #: whether a cut-back sets a ceiling on the growth of dD (GROWTH_CEILING_STEPS)
         self.growth_ceiling = bool(growth_ceiling)
+        #: largest growth factor of dD along a snap-back (1: the base dD, one crack_advance)
+        self.snapback_growth = float(snapback_growth)
+        #: whether an easy step (EASY_STEP) doubles the step control's scale at once
+        self.easy_recovery = bool(easy_recovery)
         self.coupled = c = sim.coupled
         s = sim.solver
         if crack_advance is None:
@@ -232,6 +226,8 @@ class DissipationPath:
                 "projected": 0}
         saved = s.get_state()
         du = abs(sch.load(t_new) - load_n)
+        #: the step's last attempt: a cut-back would take du below du_min and the run would fail
+        last = du < 2.0 * sim.control.du_min
         if not self.dissipating and self.rate * du <= 0.5 * dD:
             ok, info = self._fixed(sch.load(t_new), info)
             if ok and self.coupled.D.value() - self.d_prev <= 2.0 * dD:
@@ -250,28 +246,29 @@ class DissipationPath:
             res = s.solve_displacement(load_guess)
             sim._add(info, res)
             if not res.converged:
-                info["message"] = res.message
-                return False, info
+                # no u at the guessed load (near a snap-back the guess may lie beyond the limit
+                # point): the dissipation solve starts from the last accepted state and load
+                s.set_state(saved)
+                load_guess = load_n
         keep = s.get_state()
         lo, hi = min(l_a, l_b), max(l_a, l_b)
         du_max = sim.control.du_max
         slow = False
         dD_small = None
-        max_step = LOAD_STEP_LIMIT * (hi - lo)
-        r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi), max_load_step=max_step)
+        r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
         sim._add(info, r)
         if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
             # the load moved more than a displacement step may: dissipate less, in proportion
             # (the same bound on the load change as a displacement step, at converged damage)
             dD_small = 0.9 * dD * du_max / abs(self.coupled.load_solved - load_n)
             s.set_state(keep)
-            r = self.coupled.solve(load_guess, dissipation=dD_small, load_bounds=(lo, hi), max_load_step=max_step)
+            r = self.coupled.solve(load_guess, dissipation=dD_small, load_bounds=(lo, hi))
             sim._add(info, r)
             if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
                 # still too far: the crack has stopped growing; a displacement step instead,
                 # and leave dissipation control
                 self.dissipating = False
-                return self._displacement_step(saved, t_new, info)
+                return self._displacement_step(saved, t_new, info, last)
             slow = dD_small < 0.25 * dD  # slow growth: try displacement steps again next
         if self._converged_dissipation(r, info, t0, t1):
             self.dissipation_steps += 1
@@ -280,39 +277,34 @@ class DissipationPath:
             self._last_dD = dD_small if dD_small is not None else dD
             return True, info
         s.set_state(keep)
-        if self.coupled.load_unresponsive and du < 2.0 * sim.control.du_min:
-            # the crack has arrested, and this is the step's last attempt before the run would fail
-            # at du_min: a displacement step of du instead, and leave dissipation control
-            self.dissipating = False
-            return self._displacement_step(saved, t_new, info)
-        out = self.coupled.load_out_of_bounds
-        past_end = out is not None and direction * (out - l_b) > 0
-        if past_end:
-            # the dissipation dD is not reached on this segment: a displacement step to its end
-            return self._displacement_step(saved, t1, info)
         message = f"dissipation step of {dD:.4g} N mm: {r.message}"
-        if du < 2.0 * sim.control.du_min:
-            # the step's last attempt before the run would fail at du_min (the dissipation step
-            # stalled at every dD): a displacement step of du, with the fallback of the monolithic
-            # scheme where its coupled Newton stalls too
-            ok, info = self._displacement_step(saved, t_new, info)
+        if last:
+            # the step's last attempt before the run would fail at du_min, whether the crack has
+            # arrested (the damage no longer responds to the load) or the dissipation solve
+            # stalled at every dD (rule 3 of the module docstring): a displacement step of du, with the fallback of the monolithic scheme where its
+            # coupled Newton stalls too, and leave dissipation control
+            ok, info = self._displacement_step(saved, t_new, info, last)
             if ok:
                 self.dissipating = False
                 return True, info
             info["message"] = f"{message}; then a displacement step: {info.get('message', '')}"
             return False, info
+        out = self.coupled.load_out_of_bounds
+        if out is not None and direction * (out - l_b) > 0:
+            # the dissipation dD is not reached on this segment: a displacement step to its end
+            # (the last attempt of that step when the end is closer than 2 du_min: a cut-back
+            # would propose the same step)
+            return self._displacement_step(saved, t1, info, abs(l_b - load_n) < 2.0 * sim.control.du_min)
         info["message"] = message
         return False, info
 
-    def _displacement_step(self, saved: dict, t_new: float, info: dict):
+    def _displacement_step(self, saved: dict, t_new: float, info: dict, last: bool):
         """Instead of a dissipation step: from the state ``saved`` (the last accepted one), a
         displacement step to the load of pseudo-time ``t_new``; returns (ok, info) as :meth:`attempt`.
-        Only on the step's last attempt (its increment below 2 du_min, so that the run would fail
-        next) does a failing coupled Newton end in the fallback: before that a cut-back retries
-        the step with the coupled Newton alone, so that steps stay differentiable where they can."""
-        sim = self.sim
+        Only on the step's ``last`` attempt (the run would fail next) does a failing coupled
+        Newton end in the fallback: before that a cut-back retries the step with the coupled
+        Newton alone, so that steps stay differentiable where they can."""
         self.sim.solver.set_state(saved)
-        last = abs(sim.schedule.load(t_new) - sim.schedule.load(sim.t)) < 2.0 * sim.control.du_min
         ok, info = self._fixed(self.sim.schedule.load(t_new), info, fallback=last)
         if ok:
             info["t_new"] = t_new
@@ -446,7 +438,10 @@ class DissipationPath:
             self.at_ceiling = 0
             self.growth = min(tried, self.ceiling)
         elif not forward:
-            self.growth = min(1.0, self.ceiling, 2.0 * self.growth)
+            # a snap-back: back to the base dD, and beyond it up to snapback_growth where the
+            # steps are easy
+            cap = self.snapback_growth if iterations <= GROWTH_ITERATIONS else 1.0
+            self.growth = min(cap, self.ceiling, 2.0 * self.growth)
         elif iterations <= GROWTH_ITERATIONS:
             if self.growth >= self.ceiling:
                 self.at_ceiling += 1
@@ -466,6 +461,13 @@ class DissipationPath:
             self.rate = max(delta, 0.0) / step_size
         else:
             self.rate = math.inf if delta > 0 else self.rate
+
+    def easy(self, iterations: int, cutbacks: int) -> bool:
+        """Whether an accepted step of ``iterations`` Newton iterations and ``cutbacks`` cut-backs
+        doubles the step control's scale at once (``easy_recovery``; otherwise after ``n_s``
+        successes, as Eq. 20's control does): no cut-back and at most GROWTH_ITERATIONS
+        iterations."""
+        return self.easy_recovery and cutbacks == 0 and iterations <= GROWTH_ITERATIONS
 
     def _direction(self) -> float:
         """+1 where the schedule segment the simulation is on raises the load, else -1."""

@@ -122,9 +122,9 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
     last = {}
     solve = c.solve
 
-    def recording_solve(load, alpha_upper=None, dissipation=None, load_bounds=None, max_load_step=None):
+    def recording_solve(load, alpha_upper=None, dissipation=None, load_bounds=None):
         floors = c.floor_accepts
-        res = solve(load, alpha_upper, dissipation, load_bounds, max_load_step)
+        res = solve(load, alpha_upper, dissipation, load_bounds)
         last.clear()
         if res.converged:
             last.update(u=s.u.vec.FV().NumPy().copy(), alpha=s.alpha.vec.FV().NumPy().copy(),

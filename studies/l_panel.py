@@ -105,7 +105,7 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   crack arrests (6.284 mm, 10.3 kN): the bordered Newton step of a dissipation step asked for a
   load change of 5e11 mm, since the damage no longer responds to the load, and inverted
   elements at every line-search length; the last attempt of such a step is now a displacement
-  step (``ngtmc.path.LOAD_STEP_LIMIT``). Both cases take about twice the steps of 2026-11-25:
+  step (rule 3 of ``ngtmc.path``). Both cases take about twice the steps of 2026-11-25:
   the cause is the ceiling on the growth of the dissipation step after a cut-back (commit
   32c1e15: 155 -> 283 steps, 677 -> 1048 iterations, the same peak), which holds the crack run's
   steps small; switched off on today's code, the run stalls at 6.2986 mm instead
@@ -317,7 +317,7 @@ MEASURED = {
                                                 "(2026-12-02, commit 2333a3a). The monotonic case had failed at "
                                                 "6.284 mm where its crack arrested (a bordered Newton step asking "
                                                 "for a load change of 5e11 mm), since at least 2026-12-01; with "
-                                                "ngtmc.path.LOAD_STEP_LIMIT it takes displacement steps there. "
+                                                "ngtmc.path.LOAD_STEP_LIMIT (now rule 3 of ngtmc.path) it takes displacement steps there. "
                                                 "Both cases with the final rule (commit dedeec6; monotonic alone, "
                                                 "main beside another job). The rule's first version (commit "
                                                 "2333a3a, --workers 2, 400 s): monotonic 368 steps, 1350 "
