@@ -39,6 +39,7 @@ from .dissipation import Dissipation
 from .discretisation import bilinear_form, rules
 from .energy_forms import _QuadraticPlus, merged_terms
 from .solver import NewtonResult
+from .displacement_newton import FLOOR_RTOL  # noqa: F401  (re-exported: ngtmc.coupled.FLOOR_RTOL)
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
@@ -53,19 +54,7 @@ _DEBUG = bool(_os.environ.get("NGTMC_DEBUG_COUPLED"))
 STALL_WINDOW = 3
 STALL_FACTOR = 0.25
 
-#: Relative residual at which an iterate is accepted when the Newton direction no longer reduces
-#: the residual (line search failed or the iteration stalled), instead of the solver's rtol
-#: (1e-8). Measured at the paper's resolution of the three-point bending (2026-11-25): deep in the
-#: crack run the correction is dominated by a near-singular mode, the horizontal motion of a
-#: vertex of the void layer squeezed under the indenter (the Hessian regulariser acts on the
-#: quadratic part of the order-2 field only, so vertex motion is not penalised): a correction of
-#: 1.3e-3 mm for a residual of 5.6e-7 N, and the residual along it is quadratic already at 1e-4
-#: of the step, so no step length reduces it. The iterate there is converged to 2e-8 of the
-#: reaction. In later states of the same run the floor was 1.2e-6 and 1.4e-6 of the reaction
-#: (stalled solves at 21 N/mm in the crack run and at 0.0903 mm before the peak), hence 1e-5.
-#: The count and the worst relative residual are :attr:`CoupledNewton.floor_accepts` and
-#: :attr:`CoupledNewton.floor_worst`.
-FLOOR_RTOL = 1e-5
+#: FLOOR_RTOL (the residual floor at which a solve is accepted) is :data:`ngtmc.displacement_newton.FLOOR_RTOL`.
 
 #: Levenberg shifts mu tried in turn when the line search along the Newton direction fails: the
 #: free diagonal of the tangent is scaled by (1 + mu), which shortens the step in near-singular

@@ -32,7 +32,7 @@ from .materials import deformation_gradient, gamma_interpolation, gc_interpolati
 from .boundary_conditions import BoundaryConditions
 from .energy_forms import _ExternalWork, _QuadraticPlus, merged_terms
 from .phase_field import PhaseFieldHistory
-from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
+from .displacement_newton import DISPLACEMENT_RTOL, FLOOR_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .distributed import Ranks
 from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
 from .conditions import Point, Support, Traction
@@ -193,6 +193,10 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
         self._mesh_data(loads=False)  # the loads are built above (the tractions decide the form)
         #: accumulated seconds per part of the solution procedure (see TIMING_KEYS)
         self.timings = dict.fromkeys(TIMING_KEYS, 0.0)
+        #: relative residual at which the displacement Newton accepts an iterate whose residual no
+        #: longer falls (None: never; the adjoint's recordings), and the solves so accepted
+        self.floor_rtol = FLOOR_RTOL
+        self.floor_accepts = 0
 
     # ================================================================= mesh-dependent data
     def _apply_orders(self):

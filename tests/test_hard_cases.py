@@ -96,3 +96,24 @@ def test_load_reversal_after_cracking():
     k0 = f[1] / load[1]
     k_reload = f[i_zero + 1] / load[i_zero + 1]
     assert k_reload < 0.98 * k0
+
+
+@pytest.mark.parametrize("floor", [True, False])
+def test_displacement_newton_accepts_at_its_residual_floor(floor):
+    """A tolerance below round-off (rtol 1e-15, atol 1e-30 N): the residual stops falling at its
+    floor. The displacement Newton accepts the iterate there (Solver.floor_rtol, FLOOR_RTOL of the
+    reaction scale; the paper L-panel's crack run, 80 mm in, had a floor above its tolerance), and
+    counts it; with floor_rtol None (the adjoint's recordings) it fails instead."""
+    from ngtmc.displacement_newton import FLOOR_RTOL
+    s = ngtmc.Solver(two_blocks(gap=0.05, gamma0=1e-5), newton=ngtmc.NewtonOptions(rtol=1e-15, atol=1e-30))
+    if not floor:
+        s.floor_rtol = None
+    res = s.solve_displacement(0.01)
+    reaction = abs(s.reaction())
+    if floor:
+        assert res.converged and s.floor_accepts == 1
+        assert 0 < res.residual <= FLOOR_RTOL * reaction
+        assert res.iterations < s.newton.max_iterations      # stopped where the residual stalled
+    else:
+        assert not res.converged and s.floor_accepts == 0
+        assert "no convergence" in res.message or "line search" in res.message
