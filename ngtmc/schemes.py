@@ -70,14 +70,6 @@ class StepSchemes:
         self.growth_ceiling = copt.pop("growth_ceiling", True)
         if not isinstance(self.growth_ceiling, bool):
             raise ValueError(f"coupled growth_ceiling = {self.growth_ceiling!r} must be True or False")
-        self.snapback_growth = copt.pop("snapback_growth", 1.0)
-        from .path import GROWTH_MAX
-        if isinstance(self.snapback_growth, bool) or not (isinstance(self.snapback_growth, (int, float))
-                                                          and 1.0 <= self.snapback_growth <= GROWTH_MAX):
-            raise ValueError(f"coupled snapback_growth = {self.snapback_growth!r} must be a number in [1, {GROWTH_MAX:g}]")
-        self.easy_recovery = copt.pop("easy_recovery", False)
-        if not isinstance(self.easy_recovery, bool):
-            raise ValueError(f"coupled easy_recovery = {self.easy_recovery!r} must be True or False")
         if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
             raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
                              "(in 2D the dissipation is per mm of thickness)")
@@ -91,8 +83,7 @@ class StepSchemes:
         self._path = None
         if self.coupled is not None and self.path == "dissipation":
             from .path import DissipationPath
-            self._path = DissipationPath(self, self.crack_advance, self.crack_front, self.growth_ceiling,
-                                         float(self.snapback_growth), self.easy_recovery)
+            self._path = DissipationPath(self, self.crack_advance, self.crack_front, self.growth_ceiling)
             # a displacement step of the monolithic scheme carries no lag, so its size does not set
             # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
             # by the du_max of the lagged schemes' Eq. 20

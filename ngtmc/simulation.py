@@ -102,12 +102,7 @@ class Simulation(StepSchemes):
         mean l0 of the fracture regions) and, in 3D, ``crack_front`` (mm, the length of the crack
         front that advances; default the thinnest side of the fracture regions' bounding box;
         :mod:`ngtmc.path`), ``growth_ceiling`` (default True: a cut-back of a dissipation step
-        caps the growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`),
-        ``snapback_growth`` (default 1: the largest growth factor of the dissipation per step
-        along a snap-back, reached where its steps take at most
-        :data:`ngtmc.path.GROWTH_ITERATIONS` Newton iterations) and ``easy_recovery`` (default
-        False: the step control's scale doubles after ``n_s`` successes; True: also after each
-        step without cut-back of at most that many iterations).
+        caps the growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`).
     newton : NewtonOptions, optional
     progress : bool or callable
         True prints a progress line to stderr about every 5 s (:class:`ngtmc.plugins.Progress`, the
@@ -276,8 +271,7 @@ class Simulation(StepSchemes):
             s.update_history(info["H_trial"])
         self.t = t_new
         self.step += 1
-        easy = self._path is not None and self._path.easy(totals["newton_iterations"], cutbacks)
-        self.control_state = ctrl.accepted(self.control_state, easy)
+        self.control_state = ctrl.accepted(self.control_state)
         row = self._record(step_size=step_size, staggered_iterations=info["staggered_iterations"], cutbacks=cutbacks,
                            projected=info["projected"], **totals)
         wf = s.fracture_energy_per_thickness()

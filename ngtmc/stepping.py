@@ -150,12 +150,10 @@ class AdaptiveStepControl:
         du = state.scale * self.du_max * math.exp(-self.k_u * max(float(delta_wf), 0.0))
         return max(du, self.du_min)
 
-    def accepted(self, state: ControlState, easy: bool = False) -> ControlState:
-        """The state after a successful step: the scale doubles (up to 1) after n_s successes in a
-        row, or at once after an ``easy`` step (a rule of path following,
-        :meth:`ngtmc.path.DissipationPath.easy`; never under Eq. 20's schemes)."""
+    def accepted(self, state: ControlState) -> ControlState:
+        """The state after a successful step: the scale doubles (up to 1) after n_s successes in a row."""
         successes = state.successes + 1
-        if (easy or successes >= self.n_s) and state.scale < 1.0:
+        if successes >= self.n_s and state.scale < 1.0:
             return ControlState(scale=min(1.0, 2.0 * state.scale), successes=0)
         return ControlState(scale=state.scale, successes=successes)
 

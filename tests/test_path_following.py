@@ -109,63 +109,9 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
     assert [step(4) for _ in range(4)] == [2.0, 4.0, 8.0, GROWTH_MAX]
 
 
-def test_snapback_growth_lets_easy_snap_back_steps_grow_beyond_the_base():
-    """coupled={"snapback_growth": 4}: along a snap-back (the load goes back) an easy dissipation
-    step (at most GROWTH_ITERATIONS Newton iterations) doubles dD up to 4 times the base; a hard
-    one sets it back to the base. The default (1) keeps the base along snap-backs."""
-    from ngtmc.path import GROWTH_ITERATIONS
-
-    def growths(coupled, iterations):
-        sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                               scheme="path-following", coupled=coupled)
-        path, s = sim._path, sim.solver
-        path.load_n = 0.005
-        path.growth = 1.0
-        out = []
-        for it in iterations:
-            path._last_kind = "dissipation"
-            s.load = path.load_n - 1e-5                     # back: a snap-back
-            path.accepted(1e-5, iterations=it)
-            out.append(path.growth)
-        return out
-
-    easy, hard = GROWTH_ITERATIONS, GROWTH_ITERATIONS + 1
-    assert growths({"snapback_growth": 4.0}, [easy, easy, easy, hard]) == [2.0, 4.0, 4.0, 1.0]
-    assert growths({}, [easy, easy]) == [1.0, 1.0]
-
-
-def test_easy_recovery_doubles_the_step_controls_scale_after_an_easy_step():
-    """coupled={"easy_recovery": True}: an accepted step without cut-back of at most
-    GROWTH_ITERATIONS Newton iterations doubles the step control's scale at once (after a deep
-    cut-back the displacement steps would otherwise stay tiny for n_s steps per doubling); not by
-    default, and never a step with a cut-back or more iterations."""
-    from ngtmc.path import GROWTH_ITERATIONS
-
-    def sim(coupled):
-        return ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                                scheme="path-following", coupled=coupled)
-
-    path = sim({"easy_recovery": True})._path
-    assert path.easy(GROWTH_ITERATIONS, 0)
-    assert not path.easy(GROWTH_ITERATIONS + 1, 0) and not path.easy(1, 1)
-    assert not sim({})._path.easy(1, 0)
-    # in a run: the scale after a cut-back doubles with each easy step
-    a = sim({"easy_recovery": True})
-    a.control_state = ngtmc.stepping.ControlState(scale=2.0 ** -6)
-    a._path._scale_ref = a.control_state.scale
-    row = a.advance()
-    assert row["cutbacks"] == 0 and row["newton_iterations"] <= GROWTH_ITERATIONS
-    assert a.control_state.scale == 2.0 ** -5
-
-
 def test_path_options_are_checked():
     with pytest.raises(ValueError, match="growth_ceiling"):
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"growth_ceiling": "no"})
-    for bad in (0.5, 100.0, "4", True):
-        with pytest.raises(ValueError, match="snapback_growth"):
-            ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"snapback_growth": bad})
-    with pytest.raises(ValueError, match="easy_recovery"):
-        ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"easy_recovery": 1})
     with pytest.raises(ValueError, match="path"):
         ngtmc.Simulation(_plate(), 0.01, scheme="monolithic", coupled={"path": "arc-length"})
     with pytest.raises(ValueError, match="crack_advance"):

@@ -55,21 +55,6 @@ def test_halving_on_failure_and_doubling_after_successes():
     assert st.scale == 1.0
 
 
-def test_an_easy_step_doubles_the_scale_at_once():
-    """accepted(state, easy=True) (path following's easy_recovery): the scale doubles after that
-    one step, up to 1; the count of successes starts again."""
-    c = AdaptiveStepControl(du_max=1.0, du_min=1e-6, n_s=5)
-    st = ControlState(scale=2.0 ** -10, successes=3)
-    st = c.accepted(st, easy=True)
-    assert st == ControlState(scale=2.0 ** -9, successes=0)
-    st = c.accepted(st)                                  # not easy: counted towards n_s only
-    assert st == ControlState(scale=2.0 ** -9, successes=1)
-    for _ in range(9):
-        st = c.accepted(st, easy=True)
-    assert st.scale == 1.0
-    assert c.accepted(st, easy=True).scale == 1.0
-
-
 def test_control_is_a_settings_object_without_run_state():
     c = AdaptiveStepControl(du_max=1.0, du_min=1e-3, n_s=3)
     assert not hasattr(c, "scale") and not hasattr(c, "successes")
