@@ -182,7 +182,7 @@ class ParallelCases:
                 from distributed import as_completed
                 run.progress.say(f"{len(todo)} case(s) on {self.where()}")
                 ordered = costliest_first(todo)
-                futures = {client.submit(compute_case, spec, case.name, run.resume_from.pop(case.name, None),
+                futures = {client.submit(compute_case, spec, case.name, self._scattered(client, case.name),
                                          self.threads, key=f"ngtmc-{case.name}-{uuid.uuid4().hex[:8]}",
                                          pure=False, priority=len(ordered) - rank): (k, case)
                            for rank, (k, case) in enumerate(ordered)}
@@ -211,6 +211,13 @@ class ParallelCases:
             raise
         if failures:
             raise CaseFailure(failures, n)
+
+    def _scattered(self, client, name: str):
+        """The checkpoint a resumed case continues from, sent to the cluster as data (a future)
+        rather than inside the task (tens of MB at the paper's resolution, which Dask warns
+        about on every resume), or None."""
+        ck = self.run.resume_from.pop(name, None)
+        return None if ck is None else client.scatter([ck], hash=False)[0]
 
     def take(self, case, extras: dict, status: str = "failed"):
         """Case ``case`` finished in a worker: take it from its checkpoint (as a resume does), with
