@@ -31,7 +31,7 @@ class Iteration:
 
     def __init__(self, newton, load: float, alpha_upper=None, dissipation=None, load_bounds=None):
         from . import coupled as C
-        self.C = C
+        self.C = C   # the settings (STALL_*, LEVENBERG_SHIFTS, WEAK_STEP, _DEBUG) are ngtmc.coupled's
         self.n = n = newton
         self.s = s = n.s
         self.ranks = s.ranks

@@ -222,7 +222,7 @@ class DissipationPath:
                 "projected": 0}
         saved = s.get_state()
         du = abs(sch.load(t_new) - load_n)
-        #: the step's last attempt: a cut-back would take du below du_min and the run would fail
+        # the step's last attempt: a cut-back would take du below du_min and the run would fail
         last = du < 2.0 * sim.control.du_min
         if not self.dissipating and self.rate * du <= 0.5 * dD:
             ok, info = self._fixed(sch.load(t_new), info)
@@ -282,8 +282,9 @@ class DissipationPath:
         if last:
             # the step's last attempt before the run would fail at du_min, whether the crack has
             # arrested (the damage no longer responds to the load) or the dissipation solve
-            # stalled at every dD (rule 3 of the module docstring): a displacement step of du, with the fallback of the monolithic scheme where its
-            # coupled Newton stalls too, and leave dissipation control
+            # stalled at every dD (rule 3 of the module docstring): a displacement step of du,
+            # with the fallback of the monolithic scheme where its coupled Newton stalls too, and
+            # leave dissipation control
             ok, info = self._displacement_step(saved, t_new, info, last)
             if ok:
                 self.dissipating = False
