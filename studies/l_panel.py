@@ -178,7 +178,7 @@ First-loading peak against Ambati et al. 2015 (case ``monotonic``)
   6.242 mm in case monotonic; both passed stalls in the crack run near 6.208 mm (a residual floor
   of the displacement Newton, a dissipation predictor tied to the cut-back step, the step
   control's slow recovery: fixed, docs/performance.md) and were stopped again in it, main at
-  8.53 kN with 844 N mm dissipated (step 225), monotonic at 9.66 kN with 672 N mm (step 184).
+  7.52 kN with 1005 N mm dissipated (step 245), monotonic at 8.38 kN with 868 N mm (step 204).
 
 l0 sweep (case ``monotonic``, quick; ``L0_SWEEP``)
 ---------------------------------------------------
@@ -377,17 +377,18 @@ MEASURED = {
                                                "step 193 (6.2078 mm) before the fixes of that night (docs/performance.md, "
                                                "'The paper L-panel's crawl'); the last hour (23:29-00:24, both cases on "
                                                "two workers): main steps 193-225 (596 Newton iterations, 16 cut-backs, "
-                                               "3185 s), monotonic 151-184 (535, 20, 3248 s)",
+                                               "3185 s), monotonic 151-184 (535, 20, 3248 s); then 00:37-01:04: main "
+                                               "226-245 (310, 13, 1612 s), monotonic 185-204 (253, 8, 1514 s)",
                                        "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355,
                                        "first_loading_peak_force": 16006, "first_loading_peak_load": 6.2479,
                                        "monotonic_peak_force": 15729, "monotonic_peak_load": 6.2419,
-                                       "main_steps": 225, "main_newton_iterations": 1824, "main_cutbacks": 46,
-                                       "main_wall_time_s": 11903, "main_load_at_stop": 6.2067,
-                                       "main_force_at_stop": 8534, "main_dissipated_at_stop": 843.6,
-                                       "monotonic_steps": 184, "monotonic_newton_iterations": 1337,
-                                       "monotonic_cutbacks": 45, "monotonic_wall_time_s": 8243,
-                                       "monotonic_load_at_stop": 6.2076, "monotonic_force_at_stop": 9659,
-                                       "monotonic_dissipated_at_stop": 671.6, "status": "interrupted"},
+                                       "main_steps": 245, "main_newton_iterations": 2134, "main_cutbacks": 59,
+                                       "main_wall_time_s": 13515, "main_load_at_stop": 6.2114,
+                                       "main_force_at_stop": 7518, "main_dissipated_at_stop": 1005.3,
+                                       "monotonic_steps": 204, "monotonic_newton_iterations": 1590,
+                                       "monotonic_cutbacks": 53, "monotonic_wall_time_s": 9757,
+                                       "monotonic_load_at_stop": 6.2070, "monotonic_force_at_stop": 8381,
+                                       "monotonic_dissipated_at_stop": 867.8, "status": "interrupted"},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
