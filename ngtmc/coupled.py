@@ -119,10 +119,9 @@ class CoupledNewton:
             raise ValueError("the monolithic scheme does not handle Traction loads (force control); use "
                              "scheme='single-pass' or 'staggered', or a displacement load")
         CoupledLinearSolver.check(linear_solver, gmres_rtol)  # before the (costly) form
-        #: relative residual accepted where the Newton direction no longer helps (None: never;
-        #: the adjoint's recording sets None, since a gradient is only as exact as its states)
-        self.floor_rtol = FLOOR_RTOL
-        #: solves accepted at the residual floor (floor_rtol), and their largest relative residual
+        #: solves accepted at the residual floor (the solver's ``floor_rtol``, shared with the
+        #: displacement Newton; None: never, as in the adjoint's recordings), and their largest
+        #: relative residual
         self.floor_accepts = 0
         #: Newton iterations that took a Levenberg step (LEVENBERG_SHIFTS)
         self.levenberg_steps = 0

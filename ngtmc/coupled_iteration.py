@@ -140,7 +140,7 @@ class Iteration:
         iteration stalled): accept the iterate if both residuals meet FLOOR_RTOL relative to
         their scales (:mod:`ngtmc.coupled`)."""
         n = self.n
-        fr = n.floor_rtol
+        fr = self.s.floor_rtol   # one setting for both Newton solvers (Solver.floor_rtol)
         if self.lifted or not fr or not n._converged(self.res_u, self.res_a, self.g, self.reac, self.r_ref, fr,
                                                      fr / n.alpha_tol * self.tol_a, self.scale_g, g_rtol=fr):
             return None

@@ -117,7 +117,7 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
         if "mask" in rec and rec["unit"] is None:
             raise ValueError(f"record_path: the adjoint of the monolithic schemes does not handle displacement loads "
                              f"given by a callable ({rec['name']!r}) so far")
-    c.floor_rtol = s.floor_rtol = None  # states at the residual floor would limit the gradient's accuracy
+    s.floor_rtol = None  # (both Newton solvers) states at the residual floor would limit the gradient's accuracy
     c.relax = False      # a relaxation may reach another of two nearby equilibria (coupled.py)
     last = {}
     solve = c.solve

@@ -193,8 +193,9 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
         self._mesh_data(loads=False)  # the loads are built above (the tractions decide the form)
         #: accumulated seconds per part of the solution procedure (see TIMING_KEYS)
         self.timings = dict.fromkeys(TIMING_KEYS, 0.0)
-        #: relative residual at which the displacement Newton accepts an iterate whose residual no
-        #: longer falls (None: never; the adjoint's recordings), and the solves so accepted
+        #: relative residual at which the displacement Newton and the coupled Newton accept an
+        #: iterate whose residual no longer falls (None: never; the adjoint's recordings), and the
+        #: displacement solves so accepted
         self.floor_rtol = FLOOR_RTOL
         self.floor_accepts = 0
 
