@@ -222,8 +222,7 @@ class DissipationPath:
                 "projected": 0}
         saved = s.get_state()
         du = abs(sch.load(t_new) - load_n)
-        # the step's last attempt: a cut-back would take du below du_min and the run would fail
-        last = du < 2.0 * sim.control.du_min
+        last = self._last_attempt(du)
         if not self.dissipating and self.rate * du <= 0.5 * dD:
             ok, info = self._fixed(sch.load(t_new), info)
             if ok and self.coupled.D.value() - self.d_prev <= 2.0 * dD:
@@ -296,9 +295,14 @@ class DissipationPath:
             # the dissipation dD is not reached on this segment: a displacement step to its end
             # (the last attempt of that step when the end is closer than 2 du_min: a cut-back
             # would propose the same step)
-            return self._displacement_step(saved, t1, info, abs(l_b - load_n) < 2.0 * sim.control.du_min)
+            return self._displacement_step(saved, t1, info, self._last_attempt(abs(l_b - load_n)))
         info["message"] = message
         return False, info
+
+    def _last_attempt(self, increment: float) -> bool:
+        """Whether a step of ``increment`` (mm) is its step's last attempt: a cut-back would take
+        it below du_min, and the run would fail."""
+        return increment < 2.0 * self.sim.control.du_min
 
     def _displacement_step(self, saved: dict, t_new: float, info: dict, last: bool):
         """Instead of a dissipation step: from the state ``saved`` (the last accepted one), a
