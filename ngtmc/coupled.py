@@ -64,6 +64,16 @@ LEVENBERG_SHIFTS = (1e-4, 1e-2, 1.0)
 #: A Newton step accepted at a step length below WEAK_STEP is compared with Levenberg steps.
 WEAK_STEP = 1.0 / 16
 
+#: Default of ``CoupledNewton(weak_stop=...)``: an iteration that kept a weak Newton step (below
+#: WEAK_STEP) because no Levenberg step did better is treated as a stall (a displacement relaxation
+#: once, else acceptance at the residual floor, else the attempt fails and the caller cuts back).
+#: Without it, the paper L-panel's crack run spent most of a failed attempt there: from iteration
+#: 11 on, steps of 1/128-1/512 that lowered the merit by 1 % each, every one after a failed line
+#: search and three failed Levenberg factorizations, until the iteration limit (15). With it, two
+#: such steps took 76 and 74 s instead of 100 and 107 s (the same states); the quick L-panel's
+#: monotonic case 121 steps and 610 iterations instead of 129 and 654 (docs/performance.md).
+WEAK_STOP = True
+
 #: Relative residual of the coupled Newton where ``NewtonOptions.rtol`` is None (the default), and
 #: its complementarity tolerance where ``alpha_tol`` is None. The coupled Newton converges
 #: quadratically near a solution (the merit falls 1e-2, 1e-6, 1e-11, 1e-23), so 1e-6 instead of the
@@ -112,7 +122,7 @@ class CoupledNewton:
     the residual of a uniform unit alpha (dimensionless); ``max_iterations``: per attempt."""
 
     def __init__(self, solver, alpha_tol: float | None = None, max_iterations: int = 15, linear_solver: str = "block-gmres",
-                 gmres_rtol: float = 1e-8, gmres_maxsteps: int = 100):
+                 gmres_rtol: float = 1e-8, gmres_maxsteps: int = 100, weak_stop: bool = WEAK_STOP):
         if solver.alpha is None:
             raise ValueError("CoupledNewton needs a scene with fracture regions (no phase field to couple)")
         if solver._tractions:
@@ -139,6 +149,11 @@ class CoupledNewton:
         self.rtol = float(s.newton.rtol) if s.newton.rtol is not None else COUPLED_RTOL
         self.alpha_tol = float(alpha_tol) if alpha_tol is not None else self.rtol
         self.max_iterations = int(max_iterations)
+        if not isinstance(weak_stop, bool):
+            raise ValueError(f"coupled weak_stop = {weak_stop!r} must be True or False")
+        #: an iteration whose Newton step was weak (below WEAK_STEP) and that no Levenberg step
+        #: improved ends the attempt as stalled (WEAK_STOP)
+        self.weak_stop = weak_stop
         self.linear_solver = linear_solver
         self._gmres = (gmres_rtol, gmres_maxsteps)
         self.X = ngs.FESpace([s.fes_u, s.fes_a])

@@ -33,6 +33,7 @@ class Iteration:
         from . import coupled as C
         self.C = C   # the settings (STALL_*, LEVENBERG_SHIFTS, WEAK_STEP, _DEBUG) are ngtmc.coupled's
         self.n = n = newton
+        self.t_start = time.perf_counter()
         self.s = s = n.s
         self.ranks = s.ranks
         self.nu = nu = n.nu
@@ -148,14 +149,15 @@ class Iteration:
         n.floor_worst = max(n.floor_worst, self.res_u / max(self.reac, self.r_ref))
         return self.accept(it, held)
 
-    def stuck(self, it, held, message):
+    def stuck(self, it, held, message, done_iterations=None):
         """Where the iteration stalls or its line search fails: None after a displacement
         relaxation (the caller iterates on from there), else the iterate accepted at the
-        residual floor, else the failure with ``message``."""
+        residual floor, else the failure with ``message``. ``done_iterations``: the iterations
+        that made the current iterate (default it - 1: iteration ``it`` did not move it)."""
         if self.relax_u():
             self.merits.clear()
             return None
-        done = self.at_floor(it - 1, held)
+        done = self.at_floor(it - 1 if done_iterations is None else done_iterations, held)
         return done if done is not None else self.failed(it, message)
 
     # ------------------------------------------------------------------ directions
@@ -245,7 +247,8 @@ class Iteration:
         """The Newton direction does not reduce the merit function, or only along a small
         fraction of it (a near-singular or indefinite tangent): Levenberg steps, the tangent's
         free diagonal scaled by 1 + mu (LEVENBERG_SHIFTS); a weak Newton step is kept if no
-        Levenberg step does better. Returns (accepted, merit); the load is set."""
+        Levenberg step does better. Returns (accepted, merit, weak), weak: the weak Newton step
+        was kept; the load is set."""
         n, xN, tmp = self.n, self.xN, self.tmp
         kept = (xN.copy(), tmp.FV().NumPy().copy(), self.lam, merit) if accepted else None
         for mu in self.C.LEVENBERG_SHIFTS:
@@ -254,18 +257,19 @@ class Iteration:
                 break
             ok, lam_l, step_l, merit_l = self.search(*d, merit0, scale_u, lam0)
             if self.C._DEBUG:
-                print(f"    levenberg mu {mu:g}: accepted {ok} step {step_l:g} merit {merit_l:.3e} "
+                print(f"    [{time.perf_counter() - self.t_start:7.1f}s] levenberg mu {mu:g}: accepted {ok} step {step_l:g} merit {merit_l:.3e} "
                       f"(newton step {step:g} merit {merit:.3e})", flush=True)
             if ok and merit_l < merit:
                 accepted, self.lam, merit = True, lam_l, merit_l
                 kept = None
                 n.levenberg_steps += 1
                 break
-        if kept is not None:
+        weak = kept is not None
+        if weak:
             xN[:], tmp.FV().NumPy()[:], self.lam, merit = kept
             self.s.u.vec.FV().NumPy()[:] = xN[:self.nu]
             accepted = True
-        return accepted, merit
+        return accepted, merit, weak
 
     # ------------------------------------------------------------------ the iteration
     def run(self) -> NewtonResult:
@@ -293,7 +297,7 @@ class Iteration:
             self.reac = reac = ranks.masked_norm(rc, self.dir_ux)
             if C._DEBUG:
                 print(f"    gmres {n.lin.gmres_iterations[-2:]}", flush=True)
-                print(f"    coupled it {it} lam {lam:.8g} res_u {self.res_u:.3e} (ref {max(reac, self.r_ref):.3e}) "
+                print(f"    [{time.perf_counter() - self.t_start:7.1f}s] coupled it {it} lam {lam:.8g} res_u {self.res_u:.3e} (ref {max(reac, self.r_ref):.3e}) "
                       f"res_a {self.res_a:.3e} (tol {self.tol_a:.3e}) g {g:.3e} "
                       f"held {int(np.sum(held == -1))}/{int(np.sum(held == 1))}", flush=True)
             if not lifted:
@@ -339,9 +343,18 @@ class Iteration:
             self.x0.data = x
             lam0 = lam
             accepted, self.lam, step, merit = self.search(*d, merit0, scale_u, lam0)
+            weak = False
             if not lifted and (not accepted or step < C.WEAK_STEP):
-                accepted, merit = self.levenberg(accepted, step, merit, free, fixed_step, a_cur, merit0, scale_u, lam0)
+                accepted, merit, weak = self.levenberg(accepted, step, merit, free, fixed_step, a_cur, merit0, scale_u, lam0)
             have_r = accepted
+            if weak and n.weak_stop:
+                # the weak Newton step is kept, and the attempt is stalled (WEAK_STOP)
+                out = self.stuck(it, held, f"coupled Newton: only a weak step of {step:g} reduces the merit "
+                                           f"({merit0:.3g} -> {merit:.3g})", done_iterations=it)
+                if out is None:
+                    have_r = False
+                    continue
+                return out
             if not accepted:
                 xN[:] = self.x0.FV().NumPy()
                 self.lam = lam0
