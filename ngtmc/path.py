@@ -97,6 +97,14 @@ GROWTH_START = 0.25
 #: cut-back.
 GROWTH_CEILING_STEPS = 16
 
+#: A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
+#: ceiling at once, forward or snap-back. Measured in the crack runs of the L-panel: at quick
+#: (elements of 1.7 l0) steps at half the base dD took 2-3 iterations, and a ceiling that waited for
+#: 16 easy steps made the monotonic case take 409 steps and 1344 iterations against 121 and 610
+#: without a ceiling; at the paper's resolution (l0/4) steps at half the base took 5-8 iterations
+#: and steps at the base failed in half the attempts (docs/performance.md).
+CEILING_EASY_ITERATIONS = 3
+
 #: The lowest ceiling a cut-back sets, as a factor of the base dD (one l0 of crack). Measured in the
 #: crack run of the three-point bending at the paper's resolution: steps at a quarter of the base
 #: took 4 Newton iterations, at half of it 6, at the base 16-22 or failed; so half the base moves
@@ -105,6 +113,10 @@ GROWTH_CEILING_STEPS = 16
 #: cut-back, one of 16-22 iterations at the base, one more cut-back); with a floor of 1/4 it took
 #: more steps and iterations than with 1 (docs/performance.md).
 CEILING_MIN = 0.5
+
+#: The crack of ``growth_ceiling="auto"`` (DissipationPath._ceiling_applies): the elements with
+#: alpha >= CRACK_ALPHA at a vertex.
+CRACK_ALPHA = 0.5
 
 #: Fractions of the secant extrapolation tried, in turn, for the predictor of a step: the first
 #: that keeps J > 0 everywhere is taken; if none does, the step starts from the u solve with
@@ -132,15 +144,18 @@ class DissipationPath:
     """
 
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
-                 growth_ceiling: bool = True):
+                 growth_ceiling: bool | str = "auto"):
         self.sim = sim
-        #: whether a cut-back sets a ceiling on the growth of dD (GROWTH_CEILING_STEPS)
-        self.growth_ceiling = bool(growth_ceiling)
+        #: whether a cut-back sets a ceiling on the growth of dD (GROWTH_CEILING_STEPS): True,
+        #: False, or "auto", where the crack is meshed finer than l0 (:meth:`_ceiling_applies`)
+        self.growth_ceiling_option = growth_ceiling
         self.coupled = c = sim.coupled
         s = sim.solver
         if crack_advance is None:
             crack_advance = c.D.fracture_mean(s.l0)
         self.crack_advance = float(crack_advance)
+        #: the fracture regions' mean l0, mm (the crack's resolution, growth_ceiling="auto")
+        self.l0_ref = float(c.D.fracture_mean(s.l0))
         if s.dim == 3 and crack_front is None:
             lo, hi = s.fracture_box()
             crack_front = float(np.min(hi - lo))
@@ -338,6 +353,27 @@ class DissipationPath:
             return []
         return [{"u": self.x_prev[0], "alpha": self.x_prev[1]}]
 
+    def _ceiling_applies(self) -> bool:
+        """Whether a cut-back sets a ceiling: ``growth_ceiling`` True or False, or with "auto"
+        where the crack is meshed finer than l0: the median longest edge of the elements that
+        hold alpha >= CRACK_ALPHA at a vertex is at most the fracture regions' mean l0 (True where
+        nothing is cracked yet). Measured: with elements several times smaller than l0 a step of one
+        l0 of crack breaks several elements, and its Newton failed in about half the attempts (the
+        paper L-panel's crack run, l0/2.4: steps at half the base took 5-8 iterations, at the base
+        5-7 or a failed attempt of about 15); the quick three-point bending (l0/2) took 454 instead
+        of 684 iterations with the ceiling. With elements larger than l0 a step of one l0 is a
+        fraction of an element and the ceiling only holds the steps back (the quick L-panel, 1.7 l0:
+        207 steps and 1124 iterations with it, 121 and 610 without; docs/performance.md)."""
+        if self.growth_ceiling_option != "auto":
+            return bool(self.growth_ceiling_option)
+        s = self.sim.solver
+        a = s.alpha.vec.FV().NumPy()
+        nodes = s.scene.element_vertices()
+        cracked = a[nodes].max(axis=1) >= CRACK_ALPHA
+        h = s.scene.element_sizes()[cracked]
+        n, fine = s.ranks.sum(float(h.size)), s.ranks.sum(float(np.sum(h <= self.l0_ref)))
+        return n == 0 or fine >= 0.5 * n
+
     def mesh_changed(self, before: dict, previous: list[dict] = ()):
         """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`, the coupled Newton
         having followed it): ``before`` is the state before the step (the last accepted one)
@@ -433,27 +469,30 @@ class DissipationPath:
         and the last two states of the secant predictor."""
         s = self.sim.solver
         forward = (s.load - self.load_n) * self._direction() > 0
-        if not self.growth_ceiling:   # also a ceiling restored from a checkpoint of a run that had one
+        if self.growth_ceiling_option is False:   # also a ceiling restored from a checkpoint of a run that had one
             self.ceiling, self.at_ceiling = GROWTH_MAX, 0
         if self._last_kind != "dissipation":
             self.growth = GROWTH_START
-        elif cutbacks and self.growth_ceiling:
+        elif cutbacks and self._ceiling_applies():
             # the factor at which the step converged after its cut-backs
             tried = self._factor_tried if self._factor_tried is not None else self.factor
             self.ceiling = max(CEILING_MIN, tried)
             self.at_ceiling = 0
             self.growth = min(tried, self.ceiling)
-        elif not forward:
-            # a snap-back: back to the base dD, not beyond (growth up to 4 times the base where
-            # the steps were easy: the quick L-panel took 117 steps and 754 iterations against
-            # 129 and 654, docs/performance.md)
-            self.growth = min(1.0, self.ceiling, 2.0 * self.growth)
-        elif iterations <= GROWTH_ITERATIONS:
-            if self.growth >= self.ceiling:
+        else:
+            if self.growth >= self.ceiling and iterations <= GROWTH_ITERATIONS:
+                # an easy step at the ceiling: GROWTH_CEILING_STEPS of them, or one very easy
+                # one (CEILING_EASY_ITERATIONS), double it
                 self.at_ceiling += 1
-                if self.at_ceiling >= GROWTH_CEILING_STEPS:
+                if self.at_ceiling >= GROWTH_CEILING_STEPS or iterations <= CEILING_EASY_ITERATIONS:
                     self.ceiling, self.at_ceiling = min(GROWTH_MAX, 2.0 * self.ceiling), 0
-            self.growth = min(self.ceiling, 2.0 * self.growth)
+            if not forward:
+                # a snap-back: back to the base dD, not beyond (growth up to 4 times the base where
+                # the steps were easy: the quick L-panel took 117 steps and 754 iterations against
+                # 129 and 654, docs/performance.md)
+                self.growth = min(1.0, self.ceiling, 2.0 * self.growth)
+            elif iterations <= GROWTH_ITERATIONS:
+                self.growth = min(self.ceiling, 2.0 * self.growth)
         self._last_kind = None
         self._scale_ref = self.sim.control_state.scale
         d = self.coupled.D.value()

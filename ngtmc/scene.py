@@ -438,14 +438,18 @@ class Scene:
                 return m
         raise KeyError(region)
 
+    def element_vertices(self) -> np.ndarray:
+        """Vertex numbers (0-based, NGSolve's) of every element: array (mesh.ne, 3) in 2D,
+        (mesh.ne, 4) in 3D."""
+        ng = self.mesh.ngmesh
+        if self.mesh.dim == 2:
+            return ng.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+        return ng.Elements3D().NumPy()["nodes"][:, :4].astype(int) - 1
+
     def element_sizes(self) -> np.ndarray:
         """Longest edge of every element, mm (array of length mesh.ne)."""
-        ng = self.mesh.ngmesh
-        pts = np.asarray(ng.Coordinates())
-        if self.mesh.dim == 2:
-            nodes = ng.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
-        else:
-            nodes = ng.Elements3D().NumPy()["nodes"][:, :4].astype(int) - 1
+        pts = np.asarray(self.mesh.ngmesh.Coordinates())
+        nodes = self.element_vertices()
         h = np.zeros(len(nodes))
         k = nodes.shape[1]
         for i in range(k):

@@ -67,9 +67,9 @@ class StepSchemes:
             raise ValueError(f"coupled path = {self.path!r} is not one of None (load control), 'dissipation'")
         self.crack_advance = copt.pop("crack_advance", None)
         self.crack_front = copt.pop("crack_front", None)
-        self.growth_ceiling = copt.pop("growth_ceiling", True)
-        if not isinstance(self.growth_ceiling, bool):
-            raise ValueError(f"coupled growth_ceiling = {self.growth_ceiling!r} must be True or False")
+        self.growth_ceiling = copt.pop("growth_ceiling", "auto")
+        if not (isinstance(self.growth_ceiling, bool) or self.growth_ceiling == "auto"):
+            raise ValueError(f"coupled growth_ceiling = {self.growth_ceiling!r} must be True, False or 'auto'")
         if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
             raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
                              "(in 2D the dissipation is per mm of thickness)")

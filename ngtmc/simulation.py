@@ -101,8 +101,11 @@ class Simulation(StepSchemes):
         ``scheme="path-following"``), ``crack_advance`` (mm per dissipation step, default the
         mean l0 of the fracture regions) and, in 3D, ``crack_front`` (mm, the length of the crack
         front that advances; default the thinnest side of the fracture regions' bounding box;
-        :mod:`ngtmc.path`), ``growth_ceiling`` (default True: a cut-back of a dissipation step
-        caps the growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`).
+        :mod:`ngtmc.path`), ``growth_ceiling`` (True: a cut-back of a dissipation step caps the
+        growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`; default "auto": True
+        where every fracture region's smallest element is at most l0/2,
+        :meth:`ngtmc.path.DissipationPath._auto_ceiling`) and ``weak_stop`` (default True,
+        :data:`ngtmc.coupled.WEAK_STOP`).
     newton : NewtonOptions, optional
     progress : bool or callable
         True prints a progress line to stderr about every 5 s (:class:`ngtmc.plugins.Progress`, the

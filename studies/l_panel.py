@@ -579,19 +579,18 @@ PATH_FOLLOWING_N_S = 1
 
 
 def _options(p: dict) -> dict:
-    """Simulation options of both cases: the solver settings, and under path following no ceiling
-    on the growth of the dissipation per step after a cut-back (``coupled={"growth_ceiling":
-    False}``, :data:`ngtmc.path.GROWTH_CEILING_STEPS`). The ceiling saves the three-point
-    bending's post-failure tail about a third of its Newton iterations; the L-panel's long crack
-    run it slows down: quick, case monotonic, 126 instead of 370 steps and 868 instead of 1242
-    Newton iterations without it, the same peak; the cyclic case 152 instead of 294 steps and 678
-    instead of 978 iterations, with du_min at most PATH_FOLLOWING_DU_MIN (docs/performance.md).
-    Where a stall would still fail a step, its last attempt is a displacement step with staggered
-    passes (path following's fallback); the quick run of both cases needed none."""
-    opts = simulation_options(p)
-    if opts["scheme"] == "path-following":
-        opts["coupled"] = {"growth_ceiling": False}
-    return opts
+    """Simulation options of both cases: the solver settings. Under path following the ceiling on
+    the growth of the dissipation per step after a cut-back is ngtmc's default, ``"auto"``
+    (:meth:`ngtmc.path.DissipationPath._auto_ceiling`): off at quick and medium, where the band's
+    elements (2 and 1 mm) are larger than l0/2 and a step of one l0 of crack is a fraction of an
+    element (quick, case monotonic: 121 steps and 610 Newton iterations without it, 207 and 1124
+    with it; the cyclic case 152 and 678 without it, 294 and 978 with it before the ceiling's easy
+    recovery); on at the paper's resolution (0.5 mm, l0/2.4), where its crack run failed a step of
+    one l0 in about half the attempts and went on at half of it in 5-8 iterations per step
+    (docs/performance.md). Where a stall would still fail a step, its last attempt is a
+    displacement step with staggered passes (path following's fallback); the quick run of both
+    cases needed none."""
+    return simulation_options(p)
 
 
 def cases(p: dict) -> list[Case]:

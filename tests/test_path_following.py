@@ -94,7 +94,7 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
     sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
                            scheme="path-following", coupled={"growth_ceiling": False})
     path, s = sim._path, sim.solver
-    assert path.growth_ceiling is False
+    assert path.growth_ceiling_option is False
 
     def step(iterations, cutbacks=0, converged_at=None):
         path._last_kind = "dissipation"
@@ -112,6 +112,8 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
 def test_path_options_are_checked():
     with pytest.raises(ValueError, match="growth_ceiling"):
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"growth_ceiling": "no"})
+    with pytest.raises(ValueError, match="weak_stop"):
+        ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"weak_stop": 1})
     with pytest.raises(ValueError, match="path"):
         ngtmc.Simulation(_plate(), 0.01, scheme="monolithic", coupled={"path": "arc-length"})
     with pytest.raises(ValueError, match="crack_advance"):
@@ -221,6 +223,64 @@ def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
     assert [step(4) for _ in range(3)] == [0.25, 0.5, 0.5]
     state = path.get_state()
     assert state["ceiling"] == CEILING_MIN and state["at_ceiling"] == 1   # one step taken at it
+    # snap-back steps at the ceiling count towards GROWTH_CEILING_STEPS too
+    assert [step(6, forward=False) for _ in range(GROWTH_CEILING_STEPS - 2)] == [0.5] * (GROWTH_CEILING_STEPS - 2)
+    assert path.ceiling == CEILING_MIN
+    assert step(6, forward=False) == 1.0 and path.ceiling == 2 * CEILING_MIN and path.at_ceiling == 0
+    assert step(6, forward=False) == 1.0                            # a snap-back step: not past the base
+
+
+def test_the_growth_ceiling_is_on_by_default_where_the_crack_is_meshed_finer_than_l0():
+    """growth_ceiling="auto" (the default): a cut-back sets a ceiling where the median element
+    holding alpha >= CRACK_ALPHA is no larger than l0 (or nothing is cracked yet), none where the
+    crack crosses elements larger than l0 (a step of one l0 of crack is then a fraction of an
+    element); True and False force it."""
+    import warnings
+
+    def applies(l0, alpha_band, **coupled):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ngtmc.ResolutionWarning)
+            sim = ngtmc.Simulation(notched_plate(maxh=0.2, h_band=0.05, l0=l0), 0.01,
+                                   scheme="path-following", coupled=coupled)
+        s = sim.solver
+        pts = np.array([v.point for v in s.mesh.vertices])
+        a = s.alpha.vec.FV().NumPy()
+        a[:] = 0.0
+        a[:len(pts)][(np.abs(pts[:, 1] - 0.5) < alpha_band) & (pts[:, 0] > 0.3)] = 1.0   # the ligament
+        return sim._path._ceiling_applies()
+
+    assert applies(0.1, 0.0) is True          # nothing cracked: a ceiling
+    assert applies(0.1, 0.03) is True         # elements of 0.05 mm, l0 = 0.1 mm
+    assert applies(0.02, 0.03) is False       # the same elements, l0 = 0.02 mm
+    assert applies(0.02, 0.03, growth_ceiling=True) is True
+    assert applies(0.1, 0.03, growth_ceiling=False) is False
+
+
+def test_a_very_easy_step_at_the_ceiling_doubles_it_at_once():
+    """A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
+    ceiling at once, forward or snap-back (the quick L-panel's crack run, where steps at half the base
+    take 2-3 iterations, would otherwise run at half the base for 16 steps after each cut-back)."""
+    from ngtmc.path import CEILING_EASY_ITERATIONS, GROWTH_MAX
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    path, s = sim._path, sim.solver
+
+    def step(iterations, cutbacks=0, converged_at=None, forward=True):
+        path._last_kind = "dissipation"
+        path._factor_tried = converged_at if converged_at is not None else path.factor
+        s.load = path.load_n + (1e-5 if forward else -1e-5)
+        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
+        return path.growth
+
+    path.growth = 1.0
+    assert step(20, cutbacks=1, converged_at=0.5) == 0.5 and path.ceiling == 0.5
+    assert step(CEILING_EASY_ITERATIONS + 1, forward=False) == 0.5 and path.ceiling == 0.5
+    assert step(CEILING_EASY_ITERATIONS, forward=False) == 1.0 and path.ceiling == 1.0
+    assert step(CEILING_EASY_ITERATIONS) == 2.0 and path.ceiling == 2.0      # stable growth beyond the base
+    assert step(CEILING_EASY_ITERATIONS + 4) == 2.0 and path.ceiling == 2.0  # a hard step: neither moves
+    while path.ceiling < GROWTH_MAX:
+        step(CEILING_EASY_ITERATIONS)
+    assert step(CEILING_EASY_ITERATIONS) == GROWTH_MAX and path.ceiling == GROWTH_MAX
 
 
 def test_the_step_controls_scale_halves_the_dissipation_step_only_within_a_step():
