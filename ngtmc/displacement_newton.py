@@ -197,6 +197,23 @@ class DisplacementNewton:
             self._r_valid = False
             return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
 
+        def settled(it):
+            """After the residual of the iterate of ``it`` iterations: the result if it converged,
+            or if the residual fell by less than half since the last one and sits at the floor;
+            else None."""
+            nonlocal r_ref, res_prev
+            if lifted:
+                return None
+            if r_ref == 0.0:
+                r_ref = res
+            if res <= rtol * max(reac, r_ref) + opt.atol:
+                self.load = load
+                self._r_valid = True
+                return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
+            done = at_floor(it) if res > 0.5 * res_prev else None
+            res_prev = res
+            return done
+
         for it in range(1, opt.max_iterations + 1):
             t0 = time.perf_counter()
             self.a_u.Apply(u, r)
@@ -206,18 +223,9 @@ class DisplacementNewton:
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
             if _DEBUG:
                 print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} r_ref {r_ref:.3e} tol {rtol * max(reac, r_ref) + opt.atol:.3e}")
-            if not lifted:
-                if r_ref == 0.0:
-                    r_ref = res
-                if res <= rtol * max(reac, r_ref) + opt.atol:
-                    self.load = load
-                    self._r_valid = True
-                    return NewtonResult(True, it - 1, res, solve_time, assembly_time, shifted)
-                if res > 0.5 * res_prev:
-                    done = at_floor(it - 1)
-                    if done is not None:
-                        return done
-                res_prev = res
+            done = settled(it - 1)
+            if done is not None:
+                return done
             t0 = time.perf_counter()
             self.a_u.AssembleLinearization(u)
             assembly_time += time.perf_counter() - t0
@@ -300,11 +308,7 @@ class DisplacementNewton:
         # one last residual check after the final update
         self.a_u.Apply(u, r)
         _, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
-        if not lifted and res <= rtol * max(reac, r_ref) + opt.atol:
-            self.load = load
-            self._r_valid = True
-            return NewtonResult(True, opt.max_iterations, res, solve_time, assembly_time, shifted)
-        done = at_floor(opt.max_iterations) if res > 0.5 * res_prev else None
+        done = settled(opt.max_iterations)
         if done is not None:
             return done
         return NewtonResult(False, opt.max_iterations, res, solve_time, assembly_time, shifted,
