@@ -177,8 +177,26 @@ First-loading peak against Ambati et al. 2015 (case ``monotonic``)
   peaks at 16.01 kN at 6.248 mm in case main (+0.1 % against Ambati's 16 kN) and 15.73 kN at
   6.242 mm in case monotonic; both passed stalls in the crack run near 6.208 mm (a residual floor
   of the displacement Newton, a dissipation predictor tied to the cut-back step, the step
-  control's slow recovery: fixed, docs/performance.md) and were stopped again in it, main at
-  7.52 kN with 1005 N mm dissipated (step 245), monotonic at 8.38 kN with 868 N mm (step 204).
+  control's slow recovery: fixed, docs/performance.md) and **completed on 2026-12-03**: case main
+  in 361 steps, 2760 Newton iterations, 73 cut-backs, no staggered pass (17134 s of case time,
+  accumulated over several sessions, mostly beside other jobs; 745 MB), case monotonic in 323
+  steps, 2314 iterations, 69 cut-backs (13954 s).
+
+Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
+----------------------------------------------------------------------------
+* The first loading passes its peak (16.01 kN at 6.248 mm) before the turning point (6.3 mm), as
+  in the paper; the crack runs from the corner at about 6.21 mm while the force falls to 6.1 kN
+  (dissipated energy 1323 N mm, about 148 mm of crack by D / (Gc t)), then the arm is carried by
+  the contact again: 6.87 kN at 6.3 mm, 2.68 kN after unloading to 6.0 mm (first loading there:
+  5.31 kN).
+* **Reload peak 8.83 kN at 6.640 mm, +16.2 % against the paper's 7.6 kN**, just outside ±15 %
+  (the test at quick stays a strict expected failure). After it the force falls to 6.75 kN at
+  7.0 mm while the dissipated energy grows from 1.42 to 4.94 kN mm. Case monotonic ends at
+  8.79 kN at 6.6 mm.
+* So the 7.6 kN of the paper is the reload peak of a **cracked** panel. At quick and medium the
+  first loading stops before the peak (it lies at 6.451 and 6.311 mm), so their "reload peak"
+  (23.6 and 20.8 kN) is the first peak of the uncracked panel: a different quantity, not a
+  +211 % error of the model. What is left is +16 % at l0 = 1.1875 mm, the paper's own mesh size.
 
 l0 sweep (case ``monotonic``, quick; ``L0_SWEEP``)
 ---------------------------------------------------
@@ -389,6 +407,19 @@ MEASURED = {
                                        "monotonic_cutbacks": 53, "monotonic_wall_time_s": 9757,
                                        "monotonic_load_at_stop": 6.2070, "monotonic_force_at_stop": 8381,
                                        "monotonic_dissipated_at_stop": 867.8, "status": "interrupted"},
+    "paper_path_following_completed_2026_12_03": {
+        "note": "the run above, resumed on 2026-12-03 with the weak-step stall and growth_ceiling='auto' "
+                "(docs/performance.md) from main step 245 and monotonic step 204, completed (04:19-05:34, "
+                "two workers, a third job on the two cores most of the time); case times accumulated over sessions",
+        "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355,
+        "main_steps": 361, "main_newton_iterations": 2760, "main_cutbacks": 73, "main_wall_time_s": 17134,
+        "main_peak_memory_mb": 745, "first_loading_peak_force": 16006, "first_loading_peak_load": 6.2479,
+        "force_at_turning_point": 6868, "force_first_loading_at_gap": 5312, "force_unloaded_at_gap": 2676,
+        "reload_peak_force": 8830, "reload_peak_load": 6.6395, "final_force": 6752,
+        "dissipated_at_turning_point": 1422.0, "dissipated_final": 4937.4,
+        "monotonic_steps": 323, "monotonic_newton_iterations": 2314, "monotonic_cutbacks": 69,
+        "monotonic_wall_time_s": 13954, "monotonic_peak_force": 15729, "monotonic_peak_load": 6.2419,
+        "monotonic_final_force": 8790, "status": "completed"},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
@@ -684,8 +715,9 @@ EXPECTED = {
         "case": "main", "quantity": "reload_peak_force", "value": 7600.0, "unit": "N", "rel": 0.15,
         "source": "Ciceri et al. 2026, L-panel text: reload peak 7.6 kN (whole 100 mm panel)",
         "xfail": "quick: reload peak measured 23.6 kN against the paper's 7.6 kN (+211 %); medium 20.8 kN "
-                 "(+174 %); without indenter and void (load_introduction='segment') 24.4 kN at quick: not the "
-                 "contact, not the mesh; the AT-2 strength of these parameters is 14.3 MPa (see the study)"},
+                 "(+174 %): their first loading stops before the peak, so this is the uncracked panel's peak; "
+                 "at the paper's resolution, where the crack runs before the turning point as in the paper, "
+                 "8.83 kN at 6.640 mm (+16.2 %, path following, 2026-12-03; see the study)"},
     "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
                          "source": "measured, quick (regression guard; the turning point, 6.3 mm)"},
     "reload_peak_force": {"case": "main", "quantity": "reload_peak_force", "value": 23621.0, "unit": "N", "rel": 0.05,
