@@ -153,11 +153,10 @@ class DissipationPath:
         self.growth_ceiling_option = growth_ceiling
         self.coupled = c = sim.coupled
         s = sim.solver
-        if crack_advance is None:
-            crack_advance = c.D.fracture_mean(s.l0)
-        self.crack_advance = float(crack_advance)
-        #: the fracture regions' mean l0, mm (the crack's resolution, growth_ceiling="auto")
+        #: the fracture regions' mean l0, mm (default crack advance; the crack's resolution of
+        #: growth_ceiling="auto")
         self.l0_ref = float(c.D.fracture_mean(s.l0))
+        self.crack_advance = float(crack_advance) if crack_advance is not None else self.l0_ref
         if s.dim == 3 and crack_front is None:
             lo, hi = s.fracture_box()
             crack_front = float(np.min(hi - lo))
@@ -372,7 +371,7 @@ class DissipationPath:
         a = s.alpha.vec.FV().NumPy()
         nodes = s.scene.element_vertices()
         cracked = a[nodes].max(axis=1) >= CRACK_ALPHA
-        h = s.scene.element_sizes()[cracked]
+        h = s.h[cracked]   # the solver's element sizes (longest edges), kept with the mesh
         n, fine = s.ranks.sum(float(h.size)), s.ranks.sum(float(np.sum(h <= self.l0_ref)))
         return n == 0 or fine >= 0.5 * n
 

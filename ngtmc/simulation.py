@@ -102,9 +102,9 @@ class Simulation(StepSchemes):
         mean l0 of the fracture regions) and, in 3D, ``crack_front`` (mm, the length of the crack
         front that advances; default the thinnest side of the fracture regions' bounding box;
         :mod:`ngtmc.path`), ``growth_ceiling`` (True: a cut-back of a dissipation step caps the
-        growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`; default "auto": True
-        where every fracture region's smallest element is at most l0/2,
-        :meth:`ngtmc.path.DissipationPath._auto_ceiling`) and ``weak_stop`` (default True,
+        growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`; default "auto": a ceiling
+        where the crack, the elements with alpha >= 0.5, is meshed no coarser than l0,
+        :meth:`ngtmc.path.DissipationPath._ceiling_applies`) and ``weak_stop`` (default True,
         :data:`ngtmc.coupled.WEAK_STOP`).
     newton : NewtonOptions, optional
     progress : bool or callable

@@ -86,22 +86,32 @@ def test_path_following_passes_the_snap_back_in_few_steps():
         assert np.all(H1 >= H0) and np.all(a1 >= a0)
 
 
+def _growth_stepper(**coupled):
+    """A path-following Simulation of the plate and ``step(iterations, cutbacks, converged_at,
+    forward)``, which feeds DissipationPath.accepted a dissipation step with those numbers (the
+    factor of the attempt that converged: halved per cut-back by the step control's scale) and
+    returns the growth factor after it."""
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following", coupled=coupled)
+    path, s = sim._path, sim.solver
+
+    def step(iterations, cutbacks=0, converged_at=None, forward=True):
+        path._last_kind = "dissipation"
+        path._factor_tried = converged_at if converged_at is not None else path.factor
+        s.load = path.load_n + (1e-5 if forward else -1e-5)
+        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
+        return path.growth
+
+    return path, step
+
+
 def test_without_the_growth_ceiling_a_cut_back_sets_none():
     """coupled={"growth_ceiling": False}: a cut-back sets no ceiling; the growth factor is kept (the
     step control's halved scale alone shrinks the next steps until it recovers) and easy steps
     double it as before (the L-panel's long crack run, docs/performance.md)."""
     from ngtmc.path import GROWTH_MAX
-    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                           scheme="path-following", coupled={"growth_ceiling": False})
-    path, s = sim._path, sim.solver
+    path, step = _growth_stepper(growth_ceiling=False)
     assert path.growth_ceiling_option is False
-
-    def step(iterations, cutbacks=0, converged_at=None):
-        path._last_kind = "dissipation"
-        path._factor_tried = converged_at if converged_at is not None else path.factor
-        s.load = path.load_n + 1e-5
-        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
-        return path.growth
 
     path.growth = 1.0
     assert step(20, cutbacks=1, converged_at=0.5) == 1.0        # not lowered to 0.5, no ceiling
@@ -192,17 +202,7 @@ def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
     not in cycles of 1, 2, 4, 8, 16, and a crack run that failed at the base runs at half of it
     also after the step control's scale has recovered)."""
     from ngtmc.path import CEILING_MIN, GROWTH_CEILING_STEPS, GROWTH_MAX
-    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                           scheme="path-following")
-    path, s = sim._path, sim.solver
-
-    def step(iterations, cutbacks=0, converged_at=None, forward=True):
-        path._last_kind = "dissipation"
-        # the factor of the attempt that converged: halved per cut-back by the step control's scale
-        path._factor_tried = converged_at if converged_at is not None else path.factor
-        s.load = path.load_n + (1e-5 if forward else -1e-5)
-        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
-        return path.growth
+    path, step = _growth_stepper()
 
     path.growth = 1.0
     assert [step(4) for _ in range(5)] == [2.0, 4.0, 8.0, GROWTH_MAX, GROWTH_MAX]
@@ -261,16 +261,7 @@ def test_a_very_easy_step_at_the_ceiling_doubles_it_at_once():
     ceiling at once, forward or snap-back (the quick L-panel's crack run, where steps at half the base
     take 2-3 iterations, would otherwise run at half the base for 16 steps after each cut-back)."""
     from ngtmc.path import CEILING_EASY_ITERATIONS, GROWTH_MAX
-    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
-                           scheme="path-following")
-    path, s = sim._path, sim.solver
-
-    def step(iterations, cutbacks=0, converged_at=None, forward=True):
-        path._last_kind = "dissipation"
-        path._factor_tried = converged_at if converged_at is not None else path.factor
-        s.load = path.load_n + (1e-5 if forward else -1e-5)
-        path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
-        return path.growth
+    path, step = _growth_stepper()
 
     path.growth = 1.0
     assert step(20, cutbacks=1, converged_at=0.5) == 0.5 and path.ceiling == 0.5
