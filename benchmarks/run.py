@@ -11,7 +11,7 @@ adds a run of the same mesh with ``du_max`` divided by ``--reference-factor`` an
 curve are compared with it. Writes ``<out>/<study>-<resolution>-<UTC time>.json`` (one record),
 ``.md`` (the table) and ``-<label>.csv`` (each run's history); prints the table. See
 docs/performance.md for the columns. Exit status: 0 all runs completed, 1 a run failed, 2 usage
-error, 130 interrupted (the outputs are written first).
+error, 130 interrupted by Ctrl-C or SIGTERM (the outputs are written first).
 """
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ import os
 import platform
 import re
 import shlex
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -209,10 +210,15 @@ def main(argv=None, study: str | None = None, prog: str = "benchmarks.run") -> i
 
     stamp = _dt.datetime.now(_dt.timezone.utc)
     out = Path(args.out)
-    name = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}"
-    k = 1
-    while (out / f"{name}.json").exists():
-        name, k = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}-{k}", k + 1
+    name, k = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}", 1
+    out.mkdir(parents=True, exist_ok=True)
+    while True:  # reserve the record's name now: two runs started in the same second must not share it
+        try:
+            with open(out / f"{name}.json", "x") as f:
+                f.write('{"status": "running"}\n')
+            break
+        except FileExistsError:
+            name, k = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}-{k}", k + 1
     if args.reference_from:
         try:
             ref_run, ref_rec = load_reference(args.reference_from)
@@ -240,6 +246,9 @@ def main(argv=None, study: str | None = None, prog: str = "benchmarks.run") -> i
     histories = {}
     ref_curve = (ref_run["curve"]["load_mm"], ref_run["curve"]["force_N"]) if ref_run else None
 
+    def _terminate(signum, frame):  # kill -TERM ends the run as Ctrl-C does: the record is written
+        raise KeyboardInterrupt
+    signal.signal(signal.SIGTERM, _terminate)
     ngs.SetNumThreads(int(args.threads))
     interrupted = False
     with ngs.TaskManager():
