@@ -97,6 +97,17 @@ GROWTH_START = 0.25
 #: cut-back.
 GROWTH_CEILING_STEPS = 16
 
+#: Under path following the step control's scale doubles after every successful step, whatever its
+#: n_s (the paper's 5 applies to the other schemes). The scale, halved by each cut-back, bounds only
+#: the displacement steps here: the dissipation per step keeps its own memory of cut-backs (the
+#: growth factor and its ceiling). With n_s = 5, a crack run whose dissipation steps failed down to
+#: the last attempt went on in displacement steps near du_min and doubled back only every fifth
+#: step: the paper L-panel after 22 halvings at 6.2078 mm (steps of 3.6e-8 mm, 70-90 s each, about
+#: 110 of them to get back to 1e-4 mm), and the three-point bending in Miehe's set-up at quick
+#: (tests/test_tpb_miehe.py: from step 66 at 0.03707 mm, steps of 1.5e-8 mm growing 64-fold in 20
+#: steps; docs/performance.md).
+N_S = 1
+
 #: A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
 #: ceiling at once, forward or snap-back. Measured in the crack runs of the L-panel: at quick
 #: (elements of 1.7 l0) steps at half the base dD took 2-3 iterations, and a ceiling that waited for

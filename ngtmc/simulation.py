@@ -23,6 +23,7 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 import pandas as pd
 
+from .path import N_S as PATH_N_S
 from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak
 from .scene import Scene
 from .schemes import PATH_STEPS, SCHEMES, StepSchemes
@@ -274,7 +275,7 @@ class Simulation(StepSchemes):
             s.update_history(info["H_trial"])
         self.t = t_new
         self.step += 1
-        self.control_state = ctrl.accepted(self.control_state)
+        self.control_state = ctrl.accepted(self.control_state, n_s=PATH_N_S if self._path is not None else None)
         row = self._record(step_size=step_size, staggered_iterations=info["staggered_iterations"], cutbacks=cutbacks,
                            projected=info["projected"], **totals)
         wf = s.fracture_energy_per_thickness()

@@ -118,7 +118,8 @@ class AdaptiveStepControl:
         Smallest increment, mm (> 0, <= du_max): the floor of Eq. 20, and the size below which a
         failing step gives up.
     n_s : int
-        Successful steps after which the scale doubles again (>= 1).
+        Successful steps after which the scale doubles again (>= 1). Under path following the scale
+        doubles after every successful step (:data:`ngtmc.path.N_S`).
     """
 
     du_max: float
@@ -150,10 +151,11 @@ class AdaptiveStepControl:
         du = state.scale * self.du_max * math.exp(-self.k_u * max(float(delta_wf), 0.0))
         return max(du, self.du_min)
 
-    def accepted(self, state: ControlState) -> ControlState:
-        """The state after a successful step: the scale doubles (up to 1) after n_s successes in a row."""
+    def accepted(self, state: ControlState, n_s: int | None = None) -> ControlState:
+        """The state after a successful step: the scale doubles (up to 1) after ``n_s`` (default:
+        the control's) successes in a row."""
         successes = state.successes + 1
-        if successes >= self.n_s and state.scale < 1.0:
+        if successes >= (self.n_s if n_s is None else int(n_s)) and state.scale < 1.0:
             return ControlState(scale=min(1.0, 2.0 * state.scale), successes=0)
         return ControlState(scale=state.scale, successes=successes)
 

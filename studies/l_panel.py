@@ -601,16 +601,6 @@ def _load_cases(p: dict) -> tuple:
 #: 2026-12-02, docs/performance.md).
 PATH_FOLLOWING_DU_MIN = 1e-6
 
-#: n_s of the step control under path following: the scale, halved by each cut-back, doubles after
-#: every successful step. Under path following the scale bounds only the displacement steps (the
-#: dissipation per step keeps its own memory of cut-backs, ngtmc.path); with the paper's n_s = 5
-#: the paper resolution's case main, after 22 halvings in its crack run at 6.2078 mm, went on in
-#: displacement steps of 3.6e-8 mm, 70-90 s each, that dissipated nothing, and would have needed
-#: about 110 of them to double back to steps of 1e-4 mm (docs/performance.md). At quick it changes
-#: nothing: the same steps and iterations in both cases (measured 2026-12-02).
-PATH_FOLLOWING_N_S = 1
-
-
 def _options(p: dict) -> dict:
     """Simulation options of both cases: the solver settings. Under path following the ceiling on
     the growth of the dissipation per step after a cut-back is ngtmc's default, ``"auto"``
@@ -632,11 +622,10 @@ def cases(p: dict) -> list[Case]:
     du_max = float(p["du_max"])
     shift = float(p["gap"]) - effective_gap(p)
     du_min = min(float(p["du_min"]), du_max)
-    n_s = ngtmc.AdaptiveStepControl.n_s
     if p.get("scheme", SOLVER_PARAMETERS["scheme"][0]) == "path-following":   # the floor of its cut-backs only (see _options)
         du_min = min(du_min, PATH_FOLLOWING_DU_MIN)
-        n_s = PATH_FOLLOWING_N_S
-    control = ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=du_min, n_s=n_s)
+    # (under path following the scale doubles after every successful step: ngtmc.path.N_S)
+    control = ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=du_min)
     which = _load_cases(p)
     out = []
     if "main" in which:

@@ -116,3 +116,18 @@ def test_checkpointed_control_state_keeps_its_old_form():
     assert other.control_state == ControlState(scale=0.5, successes=4)
     assert other.advance()["step_size"] == pytest.approx(0.002)
     assert other.control_state == ControlState(scale=1.0, successes=0)  # 5 successes: doubled back
+
+
+@pytest.mark.parametrize("scheme, scale", [("single-pass", 0.5), ("path-following", 1.0)])
+def test_path_following_doubles_the_scale_after_every_step(scheme, scale):
+    """ngtmc.path.N_S: under path following the scale halved by a cut-back doubles after the next
+    successful step, whatever the control's n_s; the other schemes keep n_s (here 5)."""
+    ctrl = AdaptiveStepControl(du_max=0.004, du_min=1e-6, n_s=5)
+    sim = ngtmc.Simulation(tension_bar(), 0.02, ctrl, scheme=scheme)
+    sim.advance()
+    st = sim.get_state()
+    st["control"] = {"scale": 0.5, "successes": 0}
+    sim.set_state(st)
+    sim.advance()
+    assert sim.control_state.scale == scale
+    assert ctrl.accepted(ControlState(scale=0.25, successes=0), n_s=1) == ControlState(scale=0.5, successes=0)
