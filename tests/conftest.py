@@ -15,7 +15,8 @@ COSTLY_FIRST = (
     "test_study_l_panel.py",                 # 346
     "test_study_three_point_bending.py",     # 277
     "test_study_step_control.py",            # 190
-    "test_tpb_fidelity.py",                  # 188
+    "test_tpb_fidelity.py",                  # 188 before its five variant runs of 2026-12-03
+    "test_tpb_miehe.py",                     # new 2026-12-03: one window run, anisotropic
     "test_study_three_point_bending_3d.py",  # 78 + 46 + ...
     "test_monolithic.py",
     "test_sensitivities.py",

@@ -145,23 +145,29 @@ def test_linear_elastic_reference_of_the_study_beam():
 WINDOW = {"loading": "window", "stop_load": 0.06}
 
 
+def _solve(tmp_path_factory, name, overrides):
+    """Run the study at quick with ``overrides`` (the study's default scheme, one thread, no report):
+    (results of case main, history, parameters)."""
+    import json
+
+    import pandas as pd
+    out = ngtmc.run_study("three_point_bending", resolution="quick", output=tmp_path_factory.mktemp(name),
+                          overrides=overrides, report=False, progress=False, threads=1, vtk=False)
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "completed"
+    _, p = study_parameters(tpb, "quick", overrides)
+    r = meta["results"]["main"]
+    print(f"\n{name}, quick: peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.5f} mm, "
+          f"{r['steps']} steps, {r['newton_iterations']} Newton")
+    return r, pd.read_csv(out / "history.csv"), p
+
+
 @pytest.fixture(scope="module")
 def window_run(tmp_path_factory):
     """The diagnostic variant ``--set loading=window`` (Ambati's set-up: the load on a 0.1 mm window
     of the beam top, no indenter, no void, order 1 everywhere) at quick with the study's default
     scheme, past its peak: (results of the case, history, parameters)."""
-    import json
-
-    import pandas as pd
-    out = ngtmc.run_study("three_point_bending", resolution="quick", output=tmp_path_factory.mktemp("window"),
-                          overrides=WINDOW, report=False, progress=False, threads=1, vtk=False)
-    meta = json.loads((out / "metadata.json").read_text())
-    assert meta["status"] == "completed"
-    _, p = study_parameters(tpb, "quick", WINDOW)
-    r = meta["results"]["main"]
-    print(f"\nwindow variant, quick: peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.5f} mm, "
-          f"{r['steps']} steps, {r['newton_iterations']} Newton")
-    return r, pd.read_csv(out / "history.csv"), p
+    return _solve(tmp_path_factory, "window", WINDOW)
 
 
 @pytest.mark.slow
@@ -196,16 +202,7 @@ def test_ambatis_own_set_up_peaks_where_ambati_does(window_run):
 def v_window_run(tmp_path_factory):
     """The window variant with a V-notch of the same depth and mouth width (``--set loading=window
     --set notch_shape=v``) at quick, the study's default scheme, past its peak."""
-    import json
-    overrides = {**WINDOW, "notch_shape": "v"}
-    out = ngtmc.run_study("three_point_bending", resolution="quick", output=tmp_path_factory.mktemp("v_window"),
-                          overrides=overrides, report=False, progress=False, threads=1, vtk=False)
-    meta = json.loads((out / "metadata.json").read_text())
-    assert meta["status"] == "completed"
-    r = meta["results"]["main"]
-    print(f"\nwindow variant, V-notch, quick: peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.5f} mm, "
-          f"{r['steps']} steps, {r['newton_iterations']} Newton")
-    return r
+    return _solve(tmp_path_factory, "v_window", {**WINDOW, "notch_shape": "v"})[0]
 
 
 @pytest.mark.slow
@@ -217,3 +214,33 @@ def test_the_v_notch_raises_the_peak_of_ambatis_set_up(window_run, v_window_run)
     flat, v = window_run[0]["peak_force"], v_window_run["peak_force"]
     print(f"V-notch {v:.3f} against flat {flat:.3f} N/mm: {100 * (v / flat - 1):+.2f} %")
     assert v > 1.06 * flat
+
+
+#: Variants that move the window variant's peak by at most 0.7 % in docs/fidelity.md (single-pass and
+#: path following, quick): the spectral split (Ambati's history split), no fracture in a 0.2 x 0.1 mm
+#: rectangle under the window, fracture allowed in the support zones.
+SMALL_MOVERS = {"spectral": {"split": "spectral"},
+                "no_fracture_under_the_window": {"indenter_exclusion": 0.1},
+                "fracture_at_the_supports": {"support_exclusion": False}}
+
+
+@pytest.fixture(scope="module", params=list(SMALL_MOVERS))
+def small_mover_run(request, tmp_path_factory):
+    """The window variant with one of SMALL_MOVERS, solved past its peak (stopped at 0.05 mm)."""
+    return request.param, _solve(tmp_path_factory, request.param, {**WINDOW, "stop_load": 0.05,
+                                                                    **SMALL_MOVERS[request.param]})
+
+
+@pytest.mark.slow
+def test_the_split_and_the_fracture_exclusions_do_not_close_the_gap(window_run, small_mover_run):
+    """Issue 15's candidates (a) and (c) and the exclusion under the load, each solved past its peak:
+    none moves the window variant's peak by 3 % (the flat notch's peak scatters by 1.5 % between
+    meshes, docs/fidelity.md), so none explains the 11.5 % between it and Ambati's 42 N/mm. The crack
+    has run (the force has fallen below half the peak)."""
+    name, (r, h, _) = small_mover_run
+    flat = window_run[0]["peak_force"]
+    change = r["peak_force"] / flat - 1.0
+    print(f"{name}: {r['peak_force']:.3f} against {flat:.3f} N/mm ({100 * change:+.2f} %)")
+    assert abs(change) < 0.03
+    assert r["peak_force"] < 0.92 * 42.0
+    assert h["force"].iloc[-1] < 0.5 * r["peak_force"]
