@@ -227,7 +227,8 @@ they state explain: Gc 0.54 against 0.5 N/mm is +3.9 % on a peak (square-root sc
 formulation about -2 % against Miehe's anisotropic one (measured above), so Miehe's curve
 predicts about 35.4 N/mm for Ambati's parameters, 19 % below Ambati's. In Miehe's set-up
 (:data:`MIEHE_SET_UP`: Gc = 0.5 N/mm, anisotropic with the spectral split, u_y on a 0.5 mm window)
-this model peaks at **36.92 N/mm at 0.0382 mm (+6.2 %, -2.1 %)** at quick with l0 = 0.03 mm, and
+this model peaks at **36.92 N/mm at 0.0382 mm (+6.2 %, -2.1 %)** at quick with l0 = 0.03 mm (at
+the paper's mesh size at least 36.12 N/mm, +3.9 %, at 0.0378 mm; docs/fidelity.md), and
 35.67 N/mm at 0.0378 mm (+2.6 %, -2.9 %) with l0 = 0.06 mm (Miehe's l0 is not certain); with
 Ambati's window set-up it is 11.5 % below Ambati's at quick. So the model agrees with one of the
 two published solutions and not with the other, and no variant measured here (split,
