@@ -104,8 +104,8 @@ GROWTH_CEILING_STEPS = 16
 #: the last attempt went on in displacement steps near du_min and doubled back only every fifth
 #: step: the paper L-panel after 22 halvings at 6.2078 mm (steps of 3.6e-8 mm, 70-90 s each, about
 #: 110 of them to get back to 1e-4 mm), and the three-point bending in Miehe's set-up at quick
-#: (tests/test_tpb_miehe.py: from step 66 at 0.03707 mm, steps of 1.5e-8 mm growing 64-fold in 20
-#: steps; docs/performance.md).
+#: stopped at 0.045 mm (an arrested crack at 0.03707 mm: steps of 1.5e-8 mm from step 70, still
+#: 2e-6 mm at step 106; docs/performance.md, "The step control's scale under path following").
 N_S = 1
 
 #: A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
