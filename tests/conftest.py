@@ -10,14 +10,14 @@ workers start with them and the many short files fill in behind; ``--no-loadscop
 """
 from __future__ import annotations
 
-#: test files by measured cost, largest first (s, CI on 2026-12-02)
+#: test files by measured cost, largest first (s, setup and calls, CI on 2026-12-03 unless stated)
 COSTLY_FIRST = (
-    "test_study_l_panel.py",                 # 346
-    "test_study_three_point_bending.py",     # 277
-    "test_study_step_control.py",            # 190
-    "test_tpb_fidelity.py",                  # 188 before its five variant runs of 2026-12-03
-    "test_tpb_miehe.py",                     # new 2026-12-03: one window run, anisotropic
-    "test_study_three_point_bending_3d.py",  # 78 + 46 + ...
+    "test_tpb_fidelity.py",                  # 422 with three variant runs, about 340 with two
+    "test_tpb_miehe.py",                     # 258
+    "test_study_l_panel.py",                 # 140 + ...
+    "test_study_three_point_bending.py",     # 110 + ...
+    "test_study_step_control.py",            # 74 + ...
+    "test_study_three_point_bending_3d.py",  # 34 + 23 + ...
     "test_monolithic.py",
     "test_sensitivities.py",
     "test_report_3d.py",

@@ -217,11 +217,11 @@ def test_the_v_notch_raises_the_peak_of_ambatis_set_up(window_run, v_window_run)
 
 
 #: Variants that move the window variant's peak by at most 0.7 % in docs/fidelity.md (single-pass and
-#: path following, quick): the spectral split (Ambati's history split), no fracture in a 0.2 x 0.1 mm
-#: rectangle under the window, fracture allowed in the support zones.
+#: path following, quick): the spectral split (Ambati's history split) and no fracture in a 0.2 x 0.1 mm
+#: rectangle under the window. (Fracture allowed in the support zones, -0.38 %, is measured by a
+#: benchmark record, not here: each of these runs costs about 85 s of the CI's 15 minutes.)
 SMALL_MOVERS = {"spectral": {"split": "spectral"},
-                "no_fracture_under_the_window": {"indenter_exclusion": 0.1},
-                "fracture_at_the_supports": {"support_exclusion": False}}
+                "no_fracture_under_the_window": {"indenter_exclusion": 0.1}}
 
 
 @pytest.fixture(scope="module", params=list(SMALL_MOVERS))
@@ -233,7 +233,7 @@ def small_mover_run(request, tmp_path_factory):
 
 @pytest.mark.slow
 def test_the_split_and_the_fracture_exclusions_do_not_close_the_gap(window_run, small_mover_run):
-    """Issue 15's candidates (a) and (c) and the exclusion under the load, each solved past its peak:
+    """Issue 15's candidate (a), the split, and the exclusion under the load, each solved past its peak:
     none moves the window variant's peak by 3 % (the flat notch's peak scatters by 1.5 % between
     meshes, docs/fidelity.md), so none explains the 11.5 % between it and Ambati's 42 N/mm. The crack
     has run (the force has fallen below half the peak)."""
