@@ -215,7 +215,7 @@ study's order-1 elements at quick (5.1 % too stiff); the window runs' 0.936 is 2
 elastic reference) and 9.0 % (indenter, 0.771), and the peak by 3.3 % and 3.4 % (37.23 and
 37.46 N/mm).
 
-**With path following** (window, quick, 2026-12-03; ``tests/test_tpb_fidelity.py`` solves them):
+**With path following** (window, quick, 2026-12-03; ``tests/test_tpb_fidelity.py`` solves the first two):
 the spectral split 37.30 N/mm (+0.4 % against 37.15), no fracture under the window 37.23
 (+0.2 %), fracture in the support zones 37.01 (-0.4 %); without a split the beam breaks at about
 30.5 N/mm (-18 %). The report's table "Fidelity variants" lists the recorded variants
