@@ -131,6 +131,14 @@ CEILING_MIN = 0.5
 #: alpha >= CRACK_ALPHA at a vertex.
 CRACK_ALPHA = 0.5
 
+#: ``growth_ceiling="auto"`` sets the ceiling where the crack's median element (longest edge) is at
+#: most CEILING_MAX_H times l0. Measured (docs/performance.md): at 1.11 l0 (the 3D study's 2D twin
+#: at quick) the ceiling takes 71 steps and 298 Newton iterations (3 cut-backs) against 69, 408 and
+#: 17 without it; at 2.2 l0 (the quick L-panel's crack path) it took 207 steps and 1124 iterations
+#: against 121 and 610 without it. The bound lies between the two; 1.0 (until 2026-12-03) switched
+#: the ceiling off for the first.
+CEILING_MAX_H = 1.5
+
 #: Fractions of the secant extrapolation tried, in turn, for the predictor of a step: the first
 #: that keeps J > 0 everywhere is taken; if none does, the step starts from the u solve with
 #: alpha_{n-1}. Where the void under a contact is squeezed to J of about 1e-3, the full secant
@@ -367,15 +375,16 @@ class DissipationPath:
 
     def _ceiling_applies(self) -> bool:
         """Whether a cut-back sets a ceiling: ``growth_ceiling`` True or False, or with "auto"
-        where the crack is meshed finer than l0: the median longest edge of the elements that
-        hold alpha >= CRACK_ALPHA at a vertex is at most the fracture regions' mean l0 (True where
-        nothing is cracked yet). Measured: with elements several times smaller than l0 a step of one
+        where the crack is meshed finely enough: the median longest edge of the elements that
+        hold alpha >= CRACK_ALPHA at a vertex is at most CEILING_MAX_H times the fracture regions'
+        mean l0 (True where nothing is cracked yet). Measured: with elements several times smaller than l0 a step of one
         l0 of crack breaks several elements, and its Newton failed in about half the attempts (the
         paper L-panel's crack run, l0/2.4: steps at half the base took 5-8 iterations, at the base
         5-7 or a failed attempt of about 15); the quick three-point bending (l0/2) took 454 instead
         of 684 iterations with the ceiling. With elements larger than l0 a step of one l0 is a
-        fraction of an element and the ceiling only holds the steps back (the quick L-panel, 1.7 l0:
-        207 steps and 1124 iterations with it, 121 and 610 without; docs/performance.md)."""
+        fraction of an element and the ceiling only holds the steps back (the quick L-panel, 2.2 l0
+        on its crack path: 207 steps and 1124 iterations with it, 121 and 610 without;
+        docs/performance.md); at 1.11 l0 it still helps (CEILING_MAX_H)."""
         if self.growth_ceiling_option != "auto":
             return bool(self.growth_ceiling_option)
         s = self.sim.solver
@@ -383,7 +392,7 @@ class DissipationPath:
         nodes = s.scene.element_vertices()
         cracked = a[nodes].max(axis=1) >= CRACK_ALPHA
         h = s.h[cracked]   # the solver's element sizes (longest edges), kept with the mesh
-        n, fine = s.ranks.sum(float(h.size)), s.ranks.sum(float(np.sum(h <= self.l0_ref)))
+        n, fine = s.ranks.sum(float(h.size)), s.ranks.sum(float(np.sum(h <= CEILING_MAX_H * self.l0_ref)))
         return n == 0 or fine >= 0.5 * n
 
     def mesh_changed(self, before: dict, previous: list[dict] = ()):

@@ -104,7 +104,8 @@ class Simulation(StepSchemes):
         front that advances; default the thinnest side of the fracture regions' bounding box;
         :mod:`ngtmc.path`), ``growth_ceiling`` (True: a cut-back of a dissipation step caps the
         growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`; default "auto": a ceiling
-        where the crack, the elements with alpha >= 0.5, is meshed no coarser than l0,
+        where the crack, the elements with alpha >= 0.5, is meshed no coarser than 1.5 l0
+        (:data:`ngtmc.path.CEILING_MAX_H`),
         :meth:`ngtmc.path.DissipationPath._ceiling_applies`) and ``weak_stop`` (default True,
         :data:`ngtmc.coupled.WEAK_STOP`).
     newton : NewtonOptions, optional

@@ -604,11 +604,12 @@ PATH_FOLLOWING_DU_MIN = 1e-6
 def _options(p: dict) -> dict:
     """Simulation options of both cases: the solver settings. Under path following the ceiling on
     the growth of the dissipation per step after a cut-back is ngtmc's default, ``"auto"``
-    (:meth:`ngtmc.path.DissipationPath._auto_ceiling`): off at quick and medium, where the band's
-    elements (2 and 1 mm) are larger than l0/2 and a step of one l0 of crack is a fraction of an
-    element (quick, case monotonic: 121 steps and 610 Newton iterations without it, 207 and 1124
-    with it; the cyclic case 152 and 678 without it, 294 and 978 with it before the ceiling's easy
-    recovery); on at the paper's resolution (0.5 mm, l0/2.4), where its crack run failed a step of
+    (:meth:`ngtmc.path.DissipationPath._ceiling_applies`): off at quick, where the crack path's
+    elements (a median longest edge of 2.6 mm, 2.2 l0) are larger than CEILING_MAX_H = 1.5 l0 and
+    a step of one l0 of crack is a fraction of an element (quick, case monotonic: 121 steps and 610
+    Newton iterations without it, 207 and 1124 with it; the cyclic case 152 and 678 without it, 294
+    and 978 with it before the ceiling's easy recovery); on at medium (1 mm band; since 2026-12-03,
+    not measured with it) and at the paper's resolution (0.5 mm, l0/2.4), where its crack run failed a step of
     one l0 in about half the attempts and went on at half of it in 5-8 iterations per step
     (docs/performance.md). Where a stall would still fail a step, its last attempt is a
     displacement step with staggered passes (path following's fallback); the quick run of both

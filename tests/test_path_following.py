@@ -232,9 +232,9 @@ def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
 
 def test_the_growth_ceiling_is_on_by_default_where_the_crack_is_meshed_finer_than_l0():
     """growth_ceiling="auto" (the default): a cut-back sets a ceiling where the median element
-    holding alpha >= CRACK_ALPHA is no larger than l0 (or nothing is cracked yet), none where the
-    crack crosses elements larger than l0 (a step of one l0 of crack is then a fraction of an
-    element); True and False force it."""
+    holding alpha >= CRACK_ALPHA is no larger than CEILING_MAX_H = 1.5 l0 (or nothing is cracked
+    yet), none where the crack crosses larger elements (a step of one l0 of crack is then a
+    fraction of an element); True and False force it."""
     import warnings
 
     def applies(l0, alpha_band, **coupled):
@@ -252,6 +252,7 @@ def test_the_growth_ceiling_is_on_by_default_where_the_crack_is_meshed_finer_tha
     assert applies(0.1, 0.0) is True          # nothing cracked: a ceiling
     assert applies(0.1, 0.03) is True         # elements of 0.05 mm, l0 = 0.1 mm
     assert applies(0.02, 0.03) is False       # the same elements, l0 = 0.02 mm
+    assert applies(0.045, 0.03) is True       # the same elements, about 1.2 l0 (CEILING_MAX_H = 1.5)
     assert applies(0.02, 0.03, growth_ceiling=True) is True
     assert applies(0.1, 0.03, growth_ceiling=False) is False
 
