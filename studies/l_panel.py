@@ -608,8 +608,8 @@ def _options(p: dict) -> dict:
     elements (a median longest edge of 2.6 mm, 2.2 l0) are larger than CEILING_MAX_H = 1.5 l0 and
     a step of one l0 of crack is a fraction of an element (quick, case monotonic: 121 steps and 610
     Newton iterations without it, 207 and 1124 with it; the cyclic case 152 and 678 without it, 294
-    and 978 with it before the ceiling's easy recovery); on at medium (1 mm band; since 2026-12-03,
-    not measured with it) and at the paper's resolution (0.5 mm, l0/2.4), where its crack run failed a step of
+    and 978 with it before the ceiling's easy recovery); on at medium (1 mm band; since 2026-12-03;
+    case monotonic has no cut-back, so the same 608 steps and 1245 iterations with or without it) and at the paper's resolution (0.5 mm, l0/2.4), where its crack run failed a step of
     one l0 in about half the attempts and went on at half of it in 5-8 iterations per step
     (docs/performance.md). Where a stall would still fail a step, its last attempt is a
     displacement step with staggered passes (path following's fallback); the quick run of both
