@@ -210,7 +210,8 @@ def main(argv=None, study: str | None = None, prog: str = "benchmarks.run") -> i
 
     stamp = _dt.datetime.now(_dt.timezone.utc)
     out = Path(args.out)
-    name, k = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}", 1
+    base_name, k = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}", 1
+    name = base_name
     out.mkdir(parents=True, exist_ok=True)
     while True:  # reserve the record's name now: two runs started in the same second must not share it
         try:
@@ -218,7 +219,7 @@ def main(argv=None, study: str | None = None, prog: str = "benchmarks.run") -> i
                 f.write('{"status": "running"}\n')
             break
         except FileExistsError:
-            name, k = f"{mod.NAME}-{res}-{stamp.strftime('%Y%m%dT%H%M%SZ')}-{k}", k + 1
+            name, k = f"{base_name}-{k}", k + 1
     if args.reference_from:
         try:
             ref_run, ref_rec = load_reference(args.reference_from)

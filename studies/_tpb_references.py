@@ -28,12 +28,11 @@ MIEHE_SET_UP = {"loading": "window", "window_width": 0.5, "band_half_width": 0.3
                 "split": "spectral", "formulation": "anisotropic"}
 
 
-def reference_peak(name: str) -> tuple[float, float]:
-    """Peak of a digitised curve, unshifted: (force in N/mm, load-point displacement in mm);
-    ``name`` is ``"ambati"`` or ``"miehe"``."""
-    x, y = reference_curves(0.0)[name]
-    i = int(np.argmax(y))
-    return float(y[i]), float(x[i])
+def reference_peaks() -> dict:
+    """Peaks of the digitised curves, unshifted: {"ambati" or "miehe": (force in N/mm, load-point
+    displacement in mm)}."""
+    return {name: (float(y[int(np.argmax(y))]), float(x[int(np.argmax(y))]))
+            for name, (x, y) in reference_curves(0.0).items()}
 
 
 def reference_curves(gap: float) -> dict:

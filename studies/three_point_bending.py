@@ -259,7 +259,7 @@ from ngtmc.studies import _tpb_fidelity as _fidelity
 from ngtmc.studies import _tpb_geometry as _geometry
 from ngtmc.studies._tpb_elastic import elastic_slope  # noqa: F401 (part of the study's interface)
 from ngtmc.studies._tpb_references import (AMBATI_SOURCE, MIEHE_SET_UP, MIEHE_SOURCE,  # noqa: F401
-                                          reference_curves, reference_peak)
+                                          reference_curves, reference_peaks)
 
 NAME = "three_point_bending"
 TITLE = "Three-point bending with an indenter"
@@ -555,7 +555,7 @@ def post_results(p: dict, history, results: dict) -> dict:
     J -> 0, so the force starts to rise just before the gap is closed). Case ``main`` carries the
     report's table of the recorded fidelity variants (``_tpb_fidelity.report_table``)."""
     if "main" in results:
-        results["main"]["report_table"] = _fidelity.report_table()
+        results["main"]["report_table"] = _fidelity.report_table(MEASURED["quick_path_following"])
     gap = float(p["gap"])
     for name, r in results.items():
         h = history[history["case"] == name]

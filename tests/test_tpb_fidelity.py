@@ -16,6 +16,7 @@ import ngtmc
 from ngtmc.study import StudyError, study_parameters
 from ngtmc.studies import _tpb_elastic as elastic
 from ngtmc.studies import three_point_bending as tpb
+from tpb_runs import solve_quick
 
 
 def _scene(overrides):
@@ -145,29 +146,12 @@ def test_linear_elastic_reference_of_the_study_beam():
 WINDOW = {"loading": "window", "stop_load": 0.06}
 
 
-def _solve(tmp_path_factory, name, overrides):
-    """Run the study at quick with ``overrides`` (the study's default scheme, one thread, no report):
-    (results of case main, history, parameters)."""
-    import json
-
-    import pandas as pd
-    out = ngtmc.run_study("three_point_bending", resolution="quick", output=tmp_path_factory.mktemp(name),
-                          overrides=overrides, report=False, progress=False, threads=1, vtk=False)
-    meta = json.loads((out / "metadata.json").read_text())
-    assert meta["status"] == "completed"
-    _, p = study_parameters(tpb, "quick", overrides)
-    r = meta["results"]["main"]
-    print(f"\n{name}, quick: peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.5f} mm, "
-          f"{r['steps']} steps, {r['newton_iterations']} Newton")
-    return r, pd.read_csv(out / "history.csv"), p
-
-
 @pytest.fixture(scope="module")
 def window_run(tmp_path_factory):
     """The diagnostic variant ``--set loading=window`` (Ambati's set-up: the load on a 0.1 mm window
     of the beam top, no indenter, no void, order 1 everywhere) at quick with the study's default
     scheme, past its peak: (results of the case, history, parameters)."""
-    return _solve(tmp_path_factory, "window", WINDOW)
+    return solve_quick(tmp_path_factory, "window", WINDOW)
 
 
 @pytest.mark.slow
@@ -202,7 +186,7 @@ def test_ambatis_own_set_up_peaks_where_ambati_does(window_run):
 def v_window_run(tmp_path_factory):
     """The window variant with a V-notch of the same depth and mouth width (``--set loading=window
     --set notch_shape=v``) at quick, the study's default scheme, past its peak."""
-    return _solve(tmp_path_factory, "v_window", {**WINDOW, "notch_shape": "v"})[0]
+    return solve_quick(tmp_path_factory, "v_window", {**WINDOW, "notch_shape": "v"})[0]
 
 
 @pytest.mark.slow
@@ -227,7 +211,7 @@ SMALL_MOVERS = {"spectral": {"split": "spectral"},
 @pytest.fixture(scope="module", params=list(SMALL_MOVERS))
 def small_mover_run(request, tmp_path_factory):
     """The window variant with one of SMALL_MOVERS, solved past its peak (stopped at 0.05 mm)."""
-    return request.param, _solve(tmp_path_factory, request.param, {**WINDOW, "stop_load": 0.05,
+    return request.param, solve_quick(tmp_path_factory, request.param, {**WINDOW, "stop_load": 0.05,
                                                                     **SMALL_MOVERS[request.param]})
 
 

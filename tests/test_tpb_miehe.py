@@ -11,26 +11,16 @@ bounded by 1/50 of the load path, so a slightly different path) the run met an a
 """
 from __future__ import annotations
 
-import json
-
 import pytest
 
-import ngtmc
-from ngtmc.study import study_parameters
 from ngtmc.studies import three_point_bending as tpb
+from tpb_runs import solve_quick
 
 
 @pytest.fixture(scope="module")
 def miehe_run(tmp_path_factory):
-    overrides = {**tpb.MIEHE_SET_UP, "stop_load": 0.06}
-    out = ngtmc.run_study("three_point_bending", resolution="quick", output=tmp_path_factory.mktemp("miehe"),
-                          overrides=overrides, report=False, progress=False, threads=1, vtk=False)
-    meta = json.loads((out / "metadata.json").read_text())
-    assert meta["status"] == "completed"
-    r = meta["results"]["main"]
-    print(f"\nMiehe's set-up, quick: peak {r['peak_force']:.3f} N/mm at {r['peak_load']:.5f} mm, "
-          f"{r['steps']} steps, {r['newton_iterations']} Newton")
-    return r, study_parameters(tpb, "quick", overrides)[1]
+    r, _, p = solve_quick(tmp_path_factory, "miehe", {**tpb.MIEHE_SET_UP, "stop_load": 0.06})
+    return r, p
 
 
 @pytest.mark.slow
@@ -39,7 +29,7 @@ def test_miehes_set_up_peaks_where_miehe_does(miehe_run):
     study sets for Ambati's (15 % and 10 %); measured +6.2 % and -2.1 %."""
     r, p = miehe_run
     assert p["Gc"] == 0.5 and p["split"] == "spectral" and p["formulation"] == "anisotropic"
-    force, load = tpb.reference_peak("miehe")
+    force, load = tpb.reference_peaks()["miehe"]
     tol = {t["quantity"]: t["tolerance"] for t in tpb.targets(p)}
     print(f"against Miehe's {force:.2f} N/mm at {load:.4f} mm: {100 * (r['peak_force'] / force - 1):+.1f} %, "
           f"{100 * (r['peak_load'] / load - 1):+.1f} %")
@@ -52,5 +42,6 @@ def test_miehes_set_up_is_nearer_to_miehe_than_to_ambati(miehe_run):
     """With Miehe's parameters the model is nearer to Miehe's peak than to Ambati's: the two published
     curves of this benchmark differ by 21 % (34.75 and 42 N/mm)."""
     r, _ = miehe_run
-    miehe, ambati = tpb.reference_peak("miehe")[0], tpb.reference_peak("ambati")[0]
+    peaks = tpb.reference_peaks()
+    miehe, ambati = peaks["miehe"][0], peaks["ambati"][0]
     assert abs(r["peak_force"] - miehe) < abs(r["peak_force"] - ambati)
