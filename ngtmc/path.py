@@ -57,8 +57,9 @@ direction of the schedule) and a dissipation step converged in at most GROWTH_IT
 iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base;
 after a displacement step the factor is GROWTH_START (below 1: fine samples at the peak), and it
 doubles back to 1 along a snap-back. A cut-back sets a ceiling on the product of the scale and the
-growth factor: the product at which the step then converged; GROWTH_CEILING_STEPS easy steps at
-it double it again (up to GROWTH_MAX).
+growth factor: the product at which the step then converged (at least CEILING_MIN, unless the
+factor that failed had failed before: CEILING_REPEAT); GROWTH_CEILING_STEPS easy steps at it, or
+one very easy step where it is not held by CEILING_REPEAT, double it again (up to GROWTH_MAX).
 
 Units: mm, N, MPa; D per mm of thickness in 2D.
 """
@@ -126,6 +127,15 @@ CEILING_EASY_ITERATIONS = 3
 #: cut-back, one of 16-22 iterations at the base, one more cut-back); with a floor of 1/4 it took
 #: more steps and iterations than with 1 (docs/performance.md).
 CEILING_MIN = 0.5
+
+#: A cut-back whose first attempt's factor of dD is no larger than that of the last cut-back's
+#: first attempt (a factor failed again) sets the ceiling at half that factor at most, below
+#: CEILING_MIN if need be, and only GROWTH_CEILING_STEPS easy steps raise it again (not one very
+#: easy step, CEILING_EASY_ITERATIONS). Measured in the crack run of the quick 3D hemisphere: steps at a
+#: quarter of the base took 3 Newton iterations (2.5 s), steps at half of it 5-19 or failed after
+#: 12-32; with the ceiling held at CEILING_MIN every easy quarter step was followed by a half step,
+#: and seven of them failed (docs/performance.md).
+CEILING_REPEAT = True
 
 #: The crack of ``growth_ceiling="auto"`` (DissipationPath._ceiling_applies): the elements with
 #: alpha >= CRACK_ALPHA at a vertex.
@@ -204,6 +214,11 @@ class DissipationPath:
         self.segment = None
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
         self._factor_tried = None  # factor of dD of the last dissipation attempt
+        self._factor_first = None  # factor of dD of the first dissipation attempt of the current step
+        #: the factor of the first attempt of the last step that was cut back (CEILING_REPEAT), and
+        #: whether the ceiling it set waits for GROWTH_CEILING_STEPS easy steps
+        self.failed_factor = None
+        self.ceiling_held = False
         self._last_dD = None  # dD of the last successful dissipation attempt, N mm (resolve)
         #: the step control's scale when the current step began: its halvings within the step halve
         #: dD; across steps the growth factor and its ceiling carry the memory of cut-backs
@@ -250,9 +265,12 @@ class DissipationPath:
             self.rate = 0.0
             self.growth = GROWTH_START
             self.ceiling, self.at_ceiling = GROWTH_MAX, 0
+            self.failed_factor, self.ceiling_held = None, False
         self.segment = seg
         dD = self.target
         self._factor_tried = self.factor
+        if self._factor_first is None:
+            self._factor_first = self.factor
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
                 "projected": 0}
         saved = s.get_state()
@@ -497,7 +515,15 @@ class DissipationPath:
         elif cutbacks and self._ceiling_applies():
             # the factor at which the step converged after its cut-backs
             tried = self._factor_tried if self._factor_tried is not None else self.factor
+            first = self._factor_first if self._factor_first is not None else tried * 2.0 ** cutbacks
+            repeat = (CEILING_REPEAT and self.failed_factor is not None
+                      and first <= self.failed_factor * (1.0 + 1e-9))
             self.ceiling = max(CEILING_MIN, tried)
+            if repeat:
+                # the factor failed again: the ceiling goes below it, below CEILING_MIN if need be
+                self.ceiling = min(self.ceiling, 0.5 * first)
+            self.ceiling_held = repeat
+            self.failed_factor = first
             self.at_ceiling = 0
             self.growth = min(tried, self.ceiling)
         else:
@@ -505,8 +531,10 @@ class DissipationPath:
                 # an easy step at the ceiling: GROWTH_CEILING_STEPS of them, or one very easy
                 # one (CEILING_EASY_ITERATIONS), double it
                 self.at_ceiling += 1
-                if self.at_ceiling >= GROWTH_CEILING_STEPS or iterations <= CEILING_EASY_ITERATIONS:
+                if self.at_ceiling >= GROWTH_CEILING_STEPS or (iterations <= CEILING_EASY_ITERATIONS
+                                                               and not self.ceiling_held):
                     self.ceiling, self.at_ceiling = min(GROWTH_MAX, 2.0 * self.ceiling), 0
+                    self.ceiling_held = False
             if not forward:
                 # a snap-back: back to the base dD, not beyond (growth up to 4 times the base where
                 # the steps were easy: the quick L-panel took 117 steps and 754 iterations against
@@ -515,6 +543,7 @@ class DissipationPath:
             elif iterations <= GROWTH_ITERATIONS:
                 self.growth = min(self.ceiling, 2.0 * self.growth)
         self._last_kind = None
+        self._factor_first = None
         self._scale_ref = self.sim.control_state.scale
         d = self.coupled.D.value()
         delta = d - self.d_prev
@@ -538,7 +567,8 @@ class DissipationPath:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
         return {"growth": self.growth, "ceiling": self.ceiling, "scale_ref": self._scale_ref, "at_ceiling": self.at_ceiling, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
-                "delta_d_prev": self.delta_d_prev}
+                "delta_d_prev": self.delta_d_prev, "failed_factor": self.failed_factor,
+                "ceiling_held": self.ceiling_held}
 
     def get_arrays(self) -> dict:
         """The last two accepted states of the secant predictor (numpy arrays by name)."""
@@ -571,6 +601,9 @@ class DissipationPath:
         self.growth = float(st.get("growth", GROWTH_START))
         self.ceiling = float(st.get("ceiling", GROWTH_MAX))
         self.at_ceiling = int(st.get("at_ceiling", 0))
+        ff = st.get("failed_factor")
+        self.failed_factor = None if ff is None else float(ff)
+        self.ceiling_held = bool(st.get("ceiling_held", False))
         self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))
         self.segment = st.get("segment")
 

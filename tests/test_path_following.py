@@ -413,3 +413,35 @@ def test_a_displacement_step_that_the_coupled_newton_cannot_close_falls_back_to_
     assert s.load == pytest.approx(load)
     again = s.solve_displacement(load)                  # u is in equilibrium at that load and alpha
     assert again.converged and again.iterations == 0
+
+
+def test_a_factor_that_fails_again_holds_the_ceiling_below_it():
+    """CEILING_REPEAT: a cut-back whose first attempt's factor is no larger than that of the last
+    cut-back (the factor failed again) sets the ceiling at half of it, below CEILING_MIN if need be,
+    and one very easy step no longer doubles it: only GROWTH_CEILING_STEPS easy steps do (the quick
+    3D hemisphere's crack run, where steps at a quarter of the base take 3 Newton iterations and
+    steps at half of it failed in cycles). The rule's state is part of the checkpoint."""
+    from ngtmc.path import CEILING_EASY_ITERATIONS, CEILING_MIN, GROWTH_CEILING_STEPS
+    path, step = _growth_stepper()
+
+    # the first failure, at CEILING_MIN: the ceiling stays at CEILING_MIN, and an easy step
+    # doubles the growth back to it
+    path.growth = CEILING_MIN
+    assert step(20, cutbacks=1, converged_at=CEILING_MIN / 2) == CEILING_MIN / 2
+    assert path.ceiling == CEILING_MIN and not path.ceiling_held
+    assert step(CEILING_EASY_ITERATIONS) == CEILING_MIN
+    # the same factor fails again: the ceiling goes to half of it and holds
+    assert step(20, cutbacks=1, converged_at=CEILING_MIN / 2) == CEILING_MIN / 2
+    assert path.ceiling == CEILING_MIN / 2 and path.ceiling_held
+    state = path.get_state()
+    assert state["failed_factor"] == CEILING_MIN and state["ceiling_held"] is True
+    easy = [step(CEILING_EASY_ITERATIONS) for _ in range(GROWTH_CEILING_STEPS - 1)]
+    assert easy == [CEILING_MIN / 2] * (GROWTH_CEILING_STEPS - 1) and path.ceiling == CEILING_MIN / 2
+    assert step(CEILING_EASY_ITERATIONS) == CEILING_MIN and path.ceiling == CEILING_MIN   # the 16th doubles it
+    assert not path.ceiling_held
+    # a failure at a larger factor than the last one is no repeat: the ceiling is at least CEILING_MIN
+    path.growth, path.ceiling = 4.0, 16.0
+    assert step(20, cutbacks=2, converged_at=1.0) == 1.0 and path.ceiling == 1.0 and not path.ceiling_held
+    # restored from the checkpoint state
+    path.set_state(state)
+    assert path.failed_factor == CEILING_MIN and path.ceiling_held is True
