@@ -93,9 +93,10 @@ when the half model's mesh has a face at x = L/2 too (the crack on a mesh plane 
 across tetrahedra), so the two models differ by the discretisation of the crack, which the
 quarter model resolves better (docs/three-d.md).
 
-Medium, quarter (31272 tetrahedra, 47139 u dofs, two threads): peak 6.0325 N at 0.0700 mm
-(-2.7 % against quick), 1691 MB; stopped in the crack run at 0.068 mm after 45 steps and 1552 s
-(docs/three-d.md). Paper: not run.
+Medium, quarter (31272 tetrahedra, 47139 u dofs, two threads; 2026-12-03): peak 6.0325 N at
+0.0700 mm (-2.7 % against quick), the whole curve to 0.1 mm in 65 steps, 495 Newton iterations, 4
+cut-backs and 2221 s (37 min; beside a one-thread job for its first 18 minutes), 1692 MB at its
+peak (docs/three-d.md). Paper: not run.
 
 The run's peak memory is in ``metadata.json`` (``results.<case>.peak_memory_mb``) and the
 report.
@@ -203,9 +204,10 @@ MEASURED: dict = {
                                  "note": "force of the modelled quarter; alone, 2026-12-03; before CEILING_REPEAT "
                                          "(2026-12-02): 59 steps, 463 iterations, 399.7 s (docs/three-d.md)"},
     "medium_hemisphere_quarter": {"n_elements": 31272, "ndof_u": 47139, "ndof_alpha": 6475, "peak_force": 6.0325,
-                                  "peak_load": 0.0700, "threads": 2, "peak_memory_mb": 1691,
-                                  "note": "stopped in the crack run at 0.068 mm after 45 steps, 294 Newton "
-                                          "iterations, 1552 s wall, 2265 s CPU (docs/three-d.md)"},
+                                  "peak_load": 0.0700, "steps": 65, "newton_iterations": 495, "cutbacks": 4,
+                                  "threads": 2, "wall_time_s": 2221, "cpu_time_s": 3267, "peak_memory_mb": 1692,
+                                  "note": "whole curve to 0.1 mm, 2026-12-03 (CEILING_REPEAT); beside a one-thread "
+                                          "job for its first 18 minutes (docs/three-d.md)"},
     "quick_hemisphere_half": {"n_elements": 22098, "ndof_u": 36369, "ndof_alpha": 4603, "peak_force": 12.911,
                          "peak_load": 0.07314, "steps": 70, "newton_iterations": 518, "cutbacks": 2,
                          "cpu_time_s": 3013, "wall_time_s": 3422, "peak_memory_mb": 662,
