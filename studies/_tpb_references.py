@@ -31,8 +31,11 @@ MIEHE_SET_UP = {"loading": "window", "window_width": 0.5, "band_half_width": 0.3
 def reference_peaks() -> dict:
     """Peaks of the digitised curves, unshifted: {"ambati" or "miehe": (force in N/mm, load-point
     displacement in mm)}."""
-    return {name: (float(y[int(np.argmax(y))]), float(x[int(np.argmax(y))]))
-            for name, (x, y) in reference_curves(0.0).items()}
+    out = {}
+    for name, (x, y) in reference_curves(0.0).items():
+        i = int(np.argmax(y))
+        out[name] = (float(y[i]), float(x[i]))
+    return out
 
 
 def reference_curves(gap: float) -> dict:

@@ -58,6 +58,25 @@ def test_coupled_residual_is_the_hybrid_system_with_the_current_history(split, f
     np.testing.assert_allclose(R[c.nu:], ra_vec.FV().NumPy(), rtol=0, atol=1e-10 * np.abs(ra_vec.FV().NumPy()).max())
 
 
+def _tangent_and_difference(c, rng, eps):
+    """Along a random direction v (displacements of order 1e-3 mm, alpha of order 1): v, the
+    assembled coupled tangent times v, and the central difference of the residual with step eps
+    (numpy array), at the coupled Newton ``c``'s current iterate."""
+    x = c.x.vec
+    v = x.CreateVector()
+    v.FV().NumPy()[:] = rng.standard_normal(x.size)
+    v.FV().NumPy()[:c.nu] *= 1e-3
+    c.form.AssembleLinearization(x)
+    Kv = x.CreateVector()
+    Kv.data = c.form.mat * v
+    xp, xm, rp, rm = (x.CreateVector() for _ in range(4))
+    xp.data = x + eps * v
+    xm.data = x - eps * v
+    c.form.Apply(xp, rp)
+    c.form.Apply(xm, rm)
+    return v, Kv, (rp.FV().NumPy() - rm.FV().NumPy()) / (2 * eps)
+
+
 @pytest.mark.parametrize("split,formulation,order", CASES)
 def test_coupled_tangent_is_the_derivative_of_the_residual(split, formulation, order):
     """Central finite differences of the residual along a random direction against the assembled
@@ -65,19 +84,7 @@ def test_coupled_tangent_is_the_derivative_of_the_residual(split, formulation, o
     s, c = _damaged_state(1, split, formulation, order)
     x = c.x.vec
     rng = np.random.default_rng(3)
-    v = x.CreateVector()
-    v.FV().NumPy()[:] = rng.standard_normal(x.size)
-    v.FV().NumPy()[:c.nu] *= 1e-3   # displacements of order 1e-3 mm, alpha of order 1
-    c.form.AssembleLinearization(x)
-    Kv = x.CreateVector()
-    Kv.data = c.form.mat * v
-    eps = 1e-7
-    xp, xm, rp, rm = (x.CreateVector() for _ in range(4))
-    xp.data = x + eps * v
-    xm.data = x - eps * v
-    c.form.Apply(xp, rp)
-    c.form.Apply(xm, rm)
-    fd = (rp.FV().NumPy() - rm.FV().NumPy()) / (2 * eps)
+    v, Kv, fd = _tangent_and_difference(c, rng, 1e-7)
     K = Kv.FV().NumPy()
     err = np.linalg.norm(fd - K) / np.linalg.norm(K)
     print(f"relative FD error of the coupled tangent: {err:.2e}")
@@ -266,20 +273,7 @@ def test_coupled_tangent_is_the_derivative_of_the_residual_in_3d_with_a_squeezed
     s.H.vec.FV().NumPy()[:] = s.H_committed
     c = CoupledNewton(s)
     c._gather()
-    x = c.x.vec
-    v = x.CreateVector()
-    v.FV().NumPy()[:] = rng.standard_normal(x.size)
-    v.FV().NumPy()[:c.nu] *= 1e-3
-    c.form.AssembleLinearization(x)
-    Kv = x.CreateVector()
-    Kv.data = c.form.mat * v
-    eps = 1e-6
-    xp, xm, rp, rm = (x.CreateVector() for _ in range(4))
-    xp.data = x + eps * v
-    xm.data = x - eps * v
-    c.form.Apply(xp, rp)
-    c.form.Apply(xm, rm)
-    fd = (rp.FV().NumPy() - rm.FV().NumPy()) / (2 * eps)
+    _, Kv, fd = _tangent_and_difference(c, rng, 1e-6)
     K = Kv.FV().NumPy()
     err_u = np.linalg.norm((fd - K)[:c.nu]) / np.linalg.norm(K[:c.nu])
     err_a = np.linalg.norm((fd - K)[c.nu:]) / np.linalg.norm(K[c.nu:])
