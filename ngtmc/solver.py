@@ -65,9 +65,10 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
     ``H`` (history on an IntegrationRuleSpace, MPa), ``load`` (current imposed displacement, mm).
 
     ``compile``: True compiles the energy expressions symbolically, "real" generates
-    and compiles C++ code for them (about 3x faster assembly and residuals; about 3.4 s of
-    compilation per energy expression, 5 expressions and 17 s for the quick three-point bending,
-    so worth it for runs of more than a minute; falls back to True with
+    and compiles C++ code for them (about 3x faster assembly and residuals; 3-10 s of
+    compilation per energy expression, 5 expressions for the quick three-point bending, about
+    1.5 s each when an earlier process compiled them (:mod:`ngtmc.cxx_cache`), so worth it for
+    runs of more than a minute; falls back to True with
     a warning where no C++ compiler is available), False evaluates them uncompiled, "auto" (default)
     chooses "real" on meshes of at least AUTO_REAL_COMPILE_ELEMENTS elements or
     AUTO_REAL_COMPILE_DOFS displacement dofs, and True below.
