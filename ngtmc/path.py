@@ -50,16 +50,9 @@ applied: it bounds the dissipation per step, which the path now does itself):
    SECANT_DAMPING), or, without it, from the u solve with alpha_{n-1}.
 
 dD = Gc_ref ``crack_advance`` (times the crack front's length ``crack_front`` in 3D) times the
-step control's scale, which halves on a failed step and
-doubles back after successes like the load increments (Gc_ref the mean Gc of the fracture
-regions, N/mm), times a growth factor: where the damage grows stably (the load goes on in the
-direction of the schedule) and a dissipation step converged in at most GROWTH_ITERATIONS Newton
-iterations without a cut-back, the next dD is twice as large, up to GROWTH_MAX times the base;
-after a displacement step the factor is GROWTH_START (below 1: fine samples at the peak), and it
-doubles back to 1 along a snap-back. A cut-back sets a ceiling on the product of the scale and the
-growth factor: the product at which the step then converged (at least CEILING_MIN, unless the
-factor that failed had failed before: CEILING_REPEAT); GROWTH_CEILING_STEPS easy steps at it, or
-one very easy step where it is not held by CEILING_REPEAT, double it again (up to GROWTH_MAX).
+step control's scale, which halves on a failed step and doubles back after successes like the load
+increments (Gc_ref the mean Gc of the fracture regions, N/mm), times a growth factor that grows
+where the damage grows stably and is held below a ceiling after cut-backs (:mod:`ngtmc.path_sizing`).
 
 Units: mm, N, MPa; D per mm of thickness in 2D.
 """
@@ -69,34 +62,9 @@ import math
 
 import numpy as np
 
-__all__ = ["DissipationPath", "GROWTH_MAX", "GROWTH_ITERATIONS", "GROWTH_START"]
+from .path_sizing import DissipationSizing
 
-#: dD grows by 2 after each dissipation step of stable growth (the load went on in the direction
-#: of the schedule) that took at most GROWTH_ITERATIONS Newton iterations and no cut-back, up to
-#: GROWTH_MAX times its base value; a snap-back step (the load went back), a displacement step or a
-#: cut-back resets it. Where damage grows diffusely (the post-failure tail, under the indenter) a
-#: step dissipates without moving a crack tip, and the base dD of about l0 of crack would take
-#: hundreds of steps there.
-GROWTH_MAX = 16.0
-GROWTH_ITERATIONS = 6
-
-#: After a displacement step dD is GROWTH_START times its base (so the first dissipation steps,
-#: where the peak of the curve lies, sample it finely), and it doubles with each dissipation step
-#: up to the base (snap-back steps) or up to GROWTH_MAX (stable growth, as above). With the base dD
-#: from the start the quick three-point bending's sampled peak was 1.2 % below the converged one.
-GROWTH_START = 0.25
-
-#: A cut-back of a dissipation step sets a ceiling on the factor of dD (the step control's scale
-#: times the growth factor): the factor at which the step then converged, g s / 2**cutbacks (at
-#: least CEILING_MIN);
-#: GROWTH_CEILING_STEPS easy steps at the ceiling double it again (up to GROWTH_MAX). Without it, the
-#: post-failure tail of the three-point bending at the paper's resolution went in cycles of five
-#: steps (growth 1, 2, 4, 8, then 16 failed in about 14 Newton iterations and was cut back), so a
-#: third of its iterations were failed attempts. A ceiling on the growth factor alone (at least 1)
-#: still let the crack run go in cycles of six steps: four easy ones at half the base dD while the
-#: step control's scale recovered from the cut-back, one of 16-22 iterations at the base, one more
-#: cut-back.
-GROWTH_CEILING_STEPS = 16
+__all__ = ["DissipationPath"]
 
 #: Under path following the step control's scale doubles after every successful step, whatever its
 #: n_s (the paper's 5 applies to the other schemes). The scale, halved by each cut-back, bounds only
@@ -108,46 +76,6 @@ GROWTH_CEILING_STEPS = 16
 #: stopped at 0.045 mm (an arrested crack at 0.03707 mm: steps of 1.5e-8 mm from step 70, still
 #: 2e-6 mm at step 106; docs/performance.md, "The step control's scale under path following").
 N_S = 1
-
-#: A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
-#: ceiling at once, forward or snap-back. Measured in the crack runs of the L-panel: at quick
-#: (elements of 1.7 l0) steps at half the base dD took 2-3 iterations, and a ceiling that waited for
-#: 16 easy steps made the monotonic case take 409 steps and 1344 iterations against 121 and 610
-#: without a ceiling, 207 and 1124 with this rule; at the paper's resolution (l0/2.4) steps at half
-#: the base took 5-8 iterations and steps at the base failed in half the attempts. Where the ceiling
-#: is "auto" it changes nothing measured: the quick three-point bending 82 steps and 391 iterations,
-#: the quick 3D hemisphere 61 and 459, with the rule and without (docs/performance.md).
-CEILING_EASY_ITERATIONS = 3
-
-#: The lowest ceiling a cut-back sets, as a factor of the base dD (one l0 of crack). Measured in the
-#: crack run of the three-point bending at the paper's resolution: steps at a quarter of the base
-#: took 4 Newton iterations, at half of it 6, at the base 16-22 or failed; so half the base moves
-#: the crack furthest per iteration. With a ceiling of at least 1 the crack run went in cycles of
-#: six steps (four easy ones at half the base while the step control's scale recovered from a
-#: cut-back, one of 16-22 iterations at the base, one more cut-back); with a floor of 1/4 it took
-#: more steps and iterations than with 1 (docs/performance.md).
-CEILING_MIN = 0.5
-
-#: A cut-back whose first attempt's factor of dD is no larger than that of the last cut-back's
-#: first attempt (a factor failed again) sets the ceiling at half that factor at most, below
-#: CEILING_MIN if need be, and only GROWTH_CEILING_STEPS easy steps raise it again (not one very
-#: easy step, CEILING_EASY_ITERATIONS). Measured in the crack run of the quick 3D hemisphere: steps at a
-#: quarter of the base took 3 Newton iterations (2.5 s), steps at half of it 5-19 or failed after
-#: 12-32; with the ceiling held at CEILING_MIN every easy quarter step was followed by a half step,
-#: and seven of them failed (docs/performance.md).
-CEILING_REPEAT = True
-
-#: The crack of ``growth_ceiling="auto"`` (DissipationPath._ceiling_applies): the elements with
-#: alpha >= CRACK_ALPHA at a vertex.
-CRACK_ALPHA = 0.5
-
-#: ``growth_ceiling="auto"`` sets the ceiling where the crack's median element (longest edge) is at
-#: most CEILING_MAX_H times l0. Measured (docs/performance.md): at 1.11 l0 (the 3D study's 2D twin
-#: at quick) the ceiling takes 71 steps and 298 Newton iterations (3 cut-backs) against 69, 408 and
-#: 17 without it; at 2.2 l0 (the quick L-panel's crack path) it took 207 steps and 1124 iterations
-#: against 121 and 610 without it. The bound lies between the two; 1.0 (until 2026-12-03) switched
-#: the ceiling off for the first.
-CEILING_MAX_H = 1.5
 
 #: Fractions of the secant extrapolation tried, in turn, for the predictor of a step: the first
 #: that keeps J > 0 everywhere is taken; if none does, the step starts from the u solve with
@@ -177,9 +105,6 @@ class DissipationPath:
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
                  growth_ceiling: bool | str = "auto"):
         self.sim = sim
-        #: whether a cut-back sets a ceiling on the growth of dD (GROWTH_CEILING_STEPS): True,
-        #: False, or "auto", where the crack is meshed finer than l0 (:meth:`_ceiling_applies`)
-        self.growth_ceiling_option = growth_ceiling
         self.coupled = c = sim.coupled
         s = sim.solver
         #: the fracture regions' mean l0, mm (default crack advance; the crack's resolution of
@@ -205,20 +130,13 @@ class DissipationPath:
         self.load_n = s.load
         self.x_prev, self.load_prev = None, None
         self.delta_d_prev = 0.0
-        #: growth factor of dD (GROWTH_START .. GROWTH_MAX, module docstring)
-        self.growth = GROWTH_START
-        #: ceiling of the growth factor (GROWTH_CEILING_STEPS), and the easy steps taken at it
-        self.ceiling = GROWTH_MAX
-        self.at_ceiling = 0
+        #: the growth factor of dD and its ceiling (:mod:`ngtmc.path_sizing`)
+        self.sizing = DissipationSizing(s, self.l0_ref, growth_ceiling)
         #: (t_start, t_end) of the schedule segment of the last attempt
         self.segment = None
         self._last_kind = None  # "dissipation" or "displacement", of the last successful attempt
         self._factor_tried = None  # factor of dD of the last dissipation attempt
         self._factor_first = None  # factor of dD of the first dissipation attempt of the current step
-        #: the factor of the first attempt of the last step that was cut back (CEILING_REPEAT), and
-        #: whether the ceiling it set waits for GROWTH_CEILING_STEPS easy steps
-        self.failed_factor = None
-        self.ceiling_held = False
         self._last_dD = None  # dD of the last successful dissipation attempt, N mm (resolve)
         #: the step control's scale when the current step began: its halvings within the step halve
         #: dD; across steps the growth factor and its ceiling carry the memory of cut-backs
@@ -233,9 +151,9 @@ class DissipationPath:
     @property
     def factor(self) -> float:
         """Factor of the base dD: the growth factor (at most the ceiling a cut-back set,
-        GROWTH_CEILING_STEPS), halved with each failed attempt of the current step (the step
+        :mod:`ngtmc.path_sizing`), halved with each failed attempt of the current step (the step
         control's scale relative to its value when the step began)."""
-        return self.growth * self.sim.control_state.scale / self._scale_ref
+        return self.sizing.growth * self.sim.control_state.scale / self._scale_ref
 
     def _segment(self):
         """(t_start, t_end) of the schedule segment the simulation is on."""
@@ -263,9 +181,7 @@ class DissipationPath:
             # last segment say nothing about this one (unloading does not dissipate)
             self.dissipating = False
             self.rate = 0.0
-            self.growth = GROWTH_START
-            self.ceiling, self.at_ceiling = GROWTH_MAX, 0
-            self.failed_factor, self.ceiling_held = None, False
+            self.sizing.reset()
         self.segment = seg
         dD = self.target
         self._factor_tried = self.factor
@@ -391,28 +307,6 @@ class DissipationPath:
             return []
         return [{"u": self.x_prev[0], "alpha": self.x_prev[1]}]
 
-    def _ceiling_applies(self) -> bool:
-        """Whether a cut-back sets a ceiling: ``growth_ceiling`` True or False, or with "auto"
-        where the crack is meshed finely enough: the median longest edge of the elements that
-        hold alpha >= CRACK_ALPHA at a vertex is at most CEILING_MAX_H times the fracture regions'
-        mean l0 (True where nothing is cracked yet). Measured: with elements several times smaller than l0 a step of one
-        l0 of crack breaks several elements, and its Newton failed in about half the attempts (the
-        paper L-panel's crack run, l0/2.4: steps at half the base took 5-8 iterations, at the base
-        5-7 or a failed attempt of about 15); the quick three-point bending (l0/2) took 454 instead
-        of 684 iterations with the ceiling. With elements larger than l0 a step of one l0 is a
-        fraction of an element and the ceiling only holds the steps back (the quick L-panel, 2.2 l0
-        on its crack path: 207 steps and 1124 iterations with it, 121 and 610 without;
-        docs/performance.md); at 1.11 l0 it still helps (CEILING_MAX_H)."""
-        if self.growth_ceiling_option != "auto":
-            return bool(self.growth_ceiling_option)
-        s = self.sim.solver
-        a = s.alpha.vec.FV().NumPy()
-        nodes = s.scene.element_vertices()
-        cracked = a[nodes].max(axis=1) >= CRACK_ALPHA
-        h = s.h[cracked]   # the solver's element sizes (longest edges), kept with the mesh
-        n, fine = s.ranks.sum(float(h.size)), s.ranks.sum(float(np.sum(h <= CEILING_MAX_H * self.l0_ref)))
-        return n == 0 or fine >= 0.5 * n
-
     def mesh_changed(self, before: dict, previous: list[dict] = ()):
         """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`, the coupled Newton
         having followed it): ``before`` is the state before the step (the last accepted one)
@@ -508,40 +402,9 @@ class DissipationPath:
         and the last two states of the secant predictor."""
         s = self.sim.solver
         forward = (s.load - self.load_n) * self._direction() > 0
-        if self.growth_ceiling_option is False:   # also a ceiling restored from a checkpoint of a run that had one
-            self.ceiling, self.at_ceiling = GROWTH_MAX, 0
-        if self._last_kind != "dissipation":
-            self.growth = GROWTH_START
-        elif cutbacks and self._ceiling_applies():
-            # the factor at which the step converged after its cut-backs
-            tried = self._factor_tried if self._factor_tried is not None else self.factor
-            first = self._factor_first if self._factor_first is not None else tried * 2.0 ** cutbacks
-            repeat = (CEILING_REPEAT and self.failed_factor is not None
-                      and first <= self.failed_factor * (1.0 + 1e-9))
-            self.ceiling = max(CEILING_MIN, tried)
-            if repeat:
-                # the factor failed again: the ceiling goes below it, below CEILING_MIN if need be
-                self.ceiling = min(self.ceiling, 0.5 * first)
-            self.ceiling_held = repeat
-            self.failed_factor = first
-            self.at_ceiling = 0
-            self.growth = min(tried, self.ceiling)
-        else:
-            if self.growth >= self.ceiling and iterations <= GROWTH_ITERATIONS:
-                # an easy step at the ceiling: GROWTH_CEILING_STEPS of them, or one very easy
-                # one (CEILING_EASY_ITERATIONS), double it
-                self.at_ceiling += 1
-                if self.at_ceiling >= GROWTH_CEILING_STEPS or (iterations <= CEILING_EASY_ITERATIONS
-                                                               and not self.ceiling_held):
-                    self.ceiling, self.at_ceiling = min(GROWTH_MAX, 2.0 * self.ceiling), 0
-                    self.ceiling_held = False
-            if not forward:
-                # a snap-back: back to the base dD, not beyond (growth up to 4 times the base where
-                # the steps were easy: the quick L-panel took 117 steps and 754 iterations against
-                # 129 and 654, docs/performance.md)
-                self.growth = min(1.0, self.ceiling, 2.0 * self.growth)
-            elif iterations <= GROWTH_ITERATIONS:
-                self.growth = min(self.ceiling, 2.0 * self.growth)
+        tried = self._factor_tried if self._factor_tried is not None else self.factor
+        first = self._factor_first if self._factor_first is not None else tried * 2.0 ** cutbacks
+        self.sizing.accepted(self._last_kind, iterations, cutbacks, forward, tried, first)
         self._last_kind = None
         self._factor_first = None
         self._scale_ref = self.sim.control_state.scale
@@ -565,10 +428,10 @@ class DissipationPath:
 
     def get_state(self) -> dict:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
-        return {"growth": self.growth, "ceiling": self.ceiling, "scale_ref": self._scale_ref, "at_ceiling": self.at_ceiling, "segment": self.segment, "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+        return {**self.sizing.get_state(), "scale_ref": self._scale_ref, "segment": self.segment,
+                "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
-                "delta_d_prev": self.delta_d_prev, "failed_factor": self.failed_factor,
-                "ceiling_held": self.ceiling_held}
+                "delta_d_prev": self.delta_d_prev}
 
     def get_arrays(self) -> dict:
         """The last two accepted states of the secant predictor (numpy arrays by name)."""
@@ -598,12 +461,7 @@ class DissipationPath:
         self.d_prev = float(st["d_prev"])
         self.dissipation_steps = int(st["dissipation_steps"])
         self.dissipating = bool(st.get("dissipating", False))
-        self.growth = float(st.get("growth", GROWTH_START))
-        self.ceiling = float(st.get("ceiling", GROWTH_MAX))
-        self.at_ceiling = int(st.get("at_ceiling", 0))
-        ff = st.get("failed_factor")
-        self.failed_factor = None if ff is None else float(ff)
-        self.ceiling_held = bool(st.get("ceiling_held", False))
+        self.sizing.set_state(st)
         self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))
         self.segment = st.get("segment")
 

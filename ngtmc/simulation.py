@@ -103,10 +103,10 @@ class Simulation(StepSchemes):
         mean l0 of the fracture regions) and, in 3D, ``crack_front`` (mm, the length of the crack
         front that advances; default the thinnest side of the fracture regions' bounding box;
         :mod:`ngtmc.path`), ``growth_ceiling`` (True: a cut-back of a dissipation step caps the
-        growth of the next ones, :data:`ngtmc.path.GROWTH_CEILING_STEPS`; default "auto": a ceiling
+        growth of the next ones, :data:`ngtmc.path_sizing.GROWTH_CEILING_STEPS`; default "auto": a ceiling
         where the crack, the elements with alpha >= 0.5, is meshed no coarser than 1.5 l0
-        (:data:`ngtmc.path.CEILING_MAX_H`),
-        :meth:`ngtmc.path.DissipationPath._ceiling_applies`) and ``weak_stop`` (default True,
+        (:data:`ngtmc.path_sizing.CEILING_MAX_H`),
+        :meth:`ngtmc.path_sizing.DissipationSizing.ceiling_applies`) and ``weak_stop`` (default True,
         :data:`ngtmc.coupled.WEAK_STOP`).
     newton : NewtonOptions, optional
     progress : bool or callable

@@ -604,7 +604,7 @@ PATH_FOLLOWING_DU_MIN = 1e-6
 def _options(p: dict) -> dict:
     """Simulation options of both cases: the solver settings. Under path following the ceiling on
     the growth of the dissipation per step after a cut-back is ngtmc's default, ``"auto"``
-    (:meth:`ngtmc.path.DissipationPath._ceiling_applies`): off at quick, where the crack path's
+    (:meth:`ngtmc.path_sizing.DissipationSizing.ceiling_applies`): off at quick, where the crack path's
     elements (a median longest edge of 2.6 mm, 2.2 l0) are larger than CEILING_MAX_H = 1.5 l0 and
     a step of one l0 of crack is a fraction of an element (quick, case monotonic: 121 steps and 610
     Newton iterations without it, 207 and 1124 with it; the cyclic case 152 and 678 without it, 294

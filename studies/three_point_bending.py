@@ -116,7 +116,7 @@ unattended (2026-11-25, one thread beside two other jobs): 151 steps, 1230 itera
 below the lagged single-pass peak of the same mesh (37.65 N/mm); 1.99 N/mm at 0.15 mm. The crack
 run (peak to 5 N/mm) is 91 of the steps and 811 of the iterations. With ``ngtmc run three-point-bending -r paper`` (two
 threads, otherwise idle machine, 2026-11-25): 153 steps, 1277 iterations, 978 s in all before the
-dissipation step's ceiling (:data:`ngtmc.path.CEILING_MIN`) and the coupled Newton's own tolerance
+dissipation step's ceiling (:data:`ngtmc.path_sizing.CEILING_MIN`) and the coupled Newton's own tolerance
 (:data:`ngtmc.coupled.COUPLED_RTOL`); after them **152 steps, 953 iterations, 10 cut-backs, 725 s
 in all (12.1 min)**, the same peak (36.421 N/mm at 0.09425 mm) and 1.984 N/mm at 0.15 mm. The quick command, ``ngtmc run three-point-bending`` (one thread, the
 default below 20000 elements), takes 89 s on the idle machine (78 steps, 462 iterations, 16.0 s

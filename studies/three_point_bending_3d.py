@@ -84,7 +84,7 @@ steps, 494 and 411 Newton iterations), 1572 s of CPU against 308 s, 972 MB at it
 the case with two threads** (324 s for the command, set-up and report included), 496 MB at its
 peak. Until 2026-12-02 the crack run after the peak took 13 Newton iterations per step (59 steps,
 463 iterations, 400 s): dissipation steps of half the base failed in cycles, and a factor that
-fails twice now holds the growth ceiling below it (``ngtmc.path.CEILING_REPEAT``;
+fails twice now holds the growth ceiling below it (``ngtmc.path_sizing.CEILING_REPEAT``;
 docs/three-d.md, docs/performance.md).
 The half model at the same sizes peaked at 12.911 N at 0.07314 mm (twice the quarter's: 12.403
 N, **-3.9 %**) in 70 steps and 518 iterations, 3013 s of CPU beside other jobs. On a coarse mesh

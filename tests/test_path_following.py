@@ -100,7 +100,7 @@ def _growth_stepper(**coupled):
         path._factor_tried = converged_at if converged_at is not None else path.factor
         s.load = path.load_n + (1e-5 if forward else -1e-5)
         path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
-        return path.growth
+        return path.sizing.growth
 
     return path, step
 
@@ -109,13 +109,13 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
     """coupled={"growth_ceiling": False}: a cut-back sets no ceiling; the growth factor is kept (the
     step control's halved scale alone shrinks the next steps until it recovers) and easy steps
     double it as before (the L-panel's long crack run, docs/performance.md)."""
-    from ngtmc.path import GROWTH_MAX
+    from ngtmc.path_sizing import GROWTH_MAX
     path, step = _growth_stepper(growth_ceiling=False)
-    assert path.growth_ceiling_option is False
+    assert path.sizing.option is False
 
-    path.growth = 1.0
+    path.sizing.growth = 1.0
     assert step(20, cutbacks=1, converged_at=0.5) == 1.0        # not lowered to 0.5, no ceiling
-    assert path.ceiling == GROWTH_MAX
+    assert path.sizing.ceiling == GROWTH_MAX
     assert [step(4) for _ in range(4)] == [2.0, 4.0, 8.0, GROWTH_MAX]
 
 
@@ -201,10 +201,10 @@ def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
     until GROWTH_CEILING_STEPS easy steps at it double it (so a tail that failed at 16x runs at 8x,
     not in cycles of 1, 2, 4, 8, 16, and a crack run that failed at the base runs at half of it
     also after the step control's scale has recovered)."""
-    from ngtmc.path import CEILING_MIN, GROWTH_CEILING_STEPS, GROWTH_MAX
+    from ngtmc.path_sizing import CEILING_MIN, GROWTH_CEILING_STEPS, GROWTH_MAX
     path, step = _growth_stepper()
 
-    path.growth = 1.0
+    path.sizing.growth = 1.0
     assert [step(4) for _ in range(5)] == [2.0, 4.0, 8.0, GROWTH_MAX, GROWTH_MAX]
     assert step(20, cutbacks=1, converged_at=GROWTH_MAX / 2) == GROWTH_MAX / 2   # failed at 16: ceiling 8
     assert [step(4) for _ in range(GROWTH_CEILING_STEPS - 1)] == [GROWTH_MAX / 2] * (GROWTH_CEILING_STEPS - 1)
@@ -213,20 +213,20 @@ def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
     assert step(20, cutbacks=2, converged_at=GROWTH_MAX / 4) == GROWTH_MAX / 4
     # a crack run: failed at the base (factor 1), converged at half of it; snap-back steps (the load
     # goes back) double the growth up to 1, but not past the ceiling
-    path.growth, path.ceiling = 1.0, GROWTH_MAX
+    path.sizing.growth, path.sizing.ceiling = 1.0, GROWTH_MAX
     assert step(20, cutbacks=1, converged_at=0.5) == 0.5
-    assert path.ceiling == 0.5
+    assert path.sizing.ceiling == 0.5
     assert [step(6, forward=False) for _ in range(3)] == [0.5] * 3
-    path.growth = 1.0
+    path.sizing.growth = 1.0
     assert step(20, cutbacks=3, converged_at=0.125) == 0.125        # the next step starts where this one converged,
-    assert path.ceiling == CEILING_MIN                              # below a ceiling of at least CEILING_MIN
+    assert path.sizing.ceiling == CEILING_MIN                              # below a ceiling of at least CEILING_MIN
     assert [step(4) for _ in range(3)] == [0.25, 0.5, 0.5]
     state = path.get_state()
     assert state["ceiling"] == CEILING_MIN and state["at_ceiling"] == 1   # one step taken at it
     # snap-back steps at the ceiling count towards GROWTH_CEILING_STEPS too
     assert [step(6, forward=False) for _ in range(GROWTH_CEILING_STEPS - 2)] == [0.5] * (GROWTH_CEILING_STEPS - 2)
-    assert path.ceiling == CEILING_MIN
-    assert step(6, forward=False) == 1.0 and path.ceiling == 2 * CEILING_MIN and path.at_ceiling == 0
+    assert path.sizing.ceiling == CEILING_MIN
+    assert step(6, forward=False) == 1.0 and path.sizing.ceiling == 2 * CEILING_MIN and path.sizing.at_ceiling == 0
     assert step(6, forward=False) == 1.0                            # a snap-back step: not past the base
 
 
@@ -247,7 +247,7 @@ def test_the_growth_ceiling_is_on_by_default_where_the_crack_is_meshed_finer_tha
         a = s.alpha.vec.FV().NumPy()
         a[:] = 0.0
         a[:len(pts)][(np.abs(pts[:, 1] - 0.5) < alpha_band) & (pts[:, 0] > 0.3)] = 1.0   # the ligament
-        return sim._path._ceiling_applies()
+        return sim._path.sizing.ceiling_applies()
 
     assert applies(0.1, 0.0) is True          # nothing cracked: a ceiling
     assert applies(0.1, 0.03) is True         # elements of 0.05 mm, l0 = 0.1 mm
@@ -261,18 +261,18 @@ def test_a_very_easy_step_at_the_ceiling_doubles_it_at_once():
     """A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
     ceiling at once, forward or snap-back (the quick L-panel's crack run, where steps at half the base
     take 2-3 iterations, would otherwise run at half the base for 16 steps after each cut-back)."""
-    from ngtmc.path import CEILING_EASY_ITERATIONS, GROWTH_MAX
+    from ngtmc.path_sizing import CEILING_EASY_ITERATIONS, GROWTH_MAX
     path, step = _growth_stepper()
 
-    path.growth = 1.0
-    assert step(20, cutbacks=1, converged_at=0.5) == 0.5 and path.ceiling == 0.5
-    assert step(CEILING_EASY_ITERATIONS + 1, forward=False) == 0.5 and path.ceiling == 0.5
-    assert step(CEILING_EASY_ITERATIONS, forward=False) == 1.0 and path.ceiling == 1.0
-    assert step(CEILING_EASY_ITERATIONS) == 2.0 and path.ceiling == 2.0      # stable growth beyond the base
-    assert step(CEILING_EASY_ITERATIONS + 4) == 2.0 and path.ceiling == 2.0  # a hard step: neither moves
-    while path.ceiling < GROWTH_MAX:
+    path.sizing.growth = 1.0
+    assert step(20, cutbacks=1, converged_at=0.5) == 0.5 and path.sizing.ceiling == 0.5
+    assert step(CEILING_EASY_ITERATIONS + 1, forward=False) == 0.5 and path.sizing.ceiling == 0.5
+    assert step(CEILING_EASY_ITERATIONS, forward=False) == 1.0 and path.sizing.ceiling == 1.0
+    assert step(CEILING_EASY_ITERATIONS) == 2.0 and path.sizing.ceiling == 2.0      # stable growth beyond the base
+    assert step(CEILING_EASY_ITERATIONS + 4) == 2.0 and path.sizing.ceiling == 2.0  # a hard step: neither moves
+    while path.sizing.ceiling < GROWTH_MAX:
         step(CEILING_EASY_ITERATIONS)
-    assert step(CEILING_EASY_ITERATIONS) == GROWTH_MAX and path.ceiling == GROWTH_MAX
+    assert step(CEILING_EASY_ITERATIONS) == GROWTH_MAX and path.sizing.ceiling == GROWTH_MAX
 
 
 def test_the_step_controls_scale_halves_the_dissipation_step_only_within_a_step():
@@ -283,7 +283,7 @@ def test_the_step_controls_scale_halves_the_dissipation_step_only_within_a_step(
                            scheme="path-following")
     path = sim._path
     base = path.gc_ref * path.crack_advance
-    path.growth = 1.0
+    path.sizing.growth = 1.0
     assert path.target == pytest.approx(base)
     sim.control_state, _ = sim.control.failed(sim.control_state, 1e-4)   # a failed attempt: half
     assert path.target == pytest.approx(base / 2)
@@ -421,27 +421,27 @@ def test_a_factor_that_fails_again_holds_the_ceiling_below_it():
     and one very easy step no longer doubles it: only GROWTH_CEILING_STEPS easy steps do (the quick
     3D hemisphere's crack run, where steps at a quarter of the base take 3 Newton iterations and
     steps at half of it failed in cycles). The rule's state is part of the checkpoint."""
-    from ngtmc.path import CEILING_EASY_ITERATIONS, CEILING_MIN, GROWTH_CEILING_STEPS
+    from ngtmc.path_sizing import CEILING_EASY_ITERATIONS, CEILING_MIN, GROWTH_CEILING_STEPS
     path, step = _growth_stepper()
 
     # the first failure, at CEILING_MIN: the ceiling stays at CEILING_MIN, and an easy step
     # doubles the growth back to it
-    path.growth = CEILING_MIN
+    path.sizing.growth = CEILING_MIN
     assert step(20, cutbacks=1, converged_at=CEILING_MIN / 2) == CEILING_MIN / 2
-    assert path.ceiling == CEILING_MIN and not path.ceiling_held
+    assert path.sizing.ceiling == CEILING_MIN and not path.sizing.ceiling_held
     assert step(CEILING_EASY_ITERATIONS) == CEILING_MIN
     # the same factor fails again: the ceiling goes to half of it and holds
     assert step(20, cutbacks=1, converged_at=CEILING_MIN / 2) == CEILING_MIN / 2
-    assert path.ceiling == CEILING_MIN / 2 and path.ceiling_held
+    assert path.sizing.ceiling == CEILING_MIN / 2 and path.sizing.ceiling_held
     state = path.get_state()
     assert state["failed_factor"] == CEILING_MIN and state["ceiling_held"] is True
     easy = [step(CEILING_EASY_ITERATIONS) for _ in range(GROWTH_CEILING_STEPS - 1)]
-    assert easy == [CEILING_MIN / 2] * (GROWTH_CEILING_STEPS - 1) and path.ceiling == CEILING_MIN / 2
-    assert step(CEILING_EASY_ITERATIONS) == CEILING_MIN and path.ceiling == CEILING_MIN   # the 16th doubles it
-    assert not path.ceiling_held
+    assert easy == [CEILING_MIN / 2] * (GROWTH_CEILING_STEPS - 1) and path.sizing.ceiling == CEILING_MIN / 2
+    assert step(CEILING_EASY_ITERATIONS) == CEILING_MIN and path.sizing.ceiling == CEILING_MIN   # the 16th doubles it
+    assert not path.sizing.ceiling_held
     # a failure at a larger factor than the last one is no repeat: the ceiling is at least CEILING_MIN
-    path.growth, path.ceiling = 4.0, 16.0
-    assert step(20, cutbacks=2, converged_at=1.0) == 1.0 and path.ceiling == 1.0 and not path.ceiling_held
+    path.sizing.growth, path.sizing.ceiling = 4.0, 16.0
+    assert step(20, cutbacks=2, converged_at=1.0) == 1.0 and path.sizing.ceiling == 1.0 and not path.sizing.ceiling_held
     # restored from the checkpoint state
     path.set_state(state)
-    assert path.failed_factor == CEILING_MIN and path.ceiling_held is True
+    assert path.sizing.failed_factor == CEILING_MIN and path.sizing.ceiling_held is True
