@@ -51,6 +51,9 @@ SOLVER_PARAMETERS = {
                                  "for several steps"),
     "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
                               "Adaptivity.h_void); 0: the void is not refined"),
+    "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
+                                     "their target (Adaptivity.size_tolerance; 1: the target is a strict bound, and "
+                                     "sizes end between half the target and the target; 1.41: centred on it)"),
 }
 _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
@@ -58,19 +61,28 @@ _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 #: values then: they are left out of the parameter hashes and of the comparison of a resumed run
 #: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
 #: resume and compare.
-INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0}
+INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0}
+
+
+#: Settings added after runs were recorded, at the value those runs had in effect: left out of the
+#: hashes and comparisons at that value, so that the runs still resume and compare.
+ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0}
 
 
 def effective_parameters(p: dict) -> dict:
     """``p`` without the settings that have no effect in it (:data:`INERT_WITHOUT_REFINEMENT`,
-    when ``h_crack`` is 0 or absent)."""
+    when ``h_crack`` is 0 or absent) and those at the value of :data:`ADDED_AT_DEFAULT`."""
     try:
         off = float(p.get("h_crack", 0.0) or 0.0) == 0.0
     except (TypeError, ValueError):
         off = False
-    if not off:
-        return dict(p)
-    return {k: v for k, v in p.items() if k not in INERT_WITHOUT_REFINEMENT}
+
+    def at_default(k, v):
+        try:
+            return k in ADDED_AT_DEFAULT and float(v) == ADDED_AT_DEFAULT[k]
+        except (TypeError, ValueError):
+            return False
+    return {k: v for k, v in p.items() if not ((off and k in INERT_WITHOUT_REFINEMENT) or at_default(k, v))}
 
 
 def simulation_options(p: dict) -> dict:
@@ -96,7 +108,8 @@ def simulation_options(p: dict) -> dict:
         try:
             h_void = float(p.get("amr_h_void", 0.0))
             out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
-                                      h_void=h_void if h_void > 0 else None)
+                                      h_void=h_void if h_void > 0 else None,
+                                      size_tolerance=float(p.get("amr_size_tolerance", 1.0)))
         except (TypeError, ValueError) as e:
             raise StudyError(str(e)) from None
     return out

@@ -39,3 +39,25 @@ def test_lookahead_marks_every_element_within_its_distance():
 def test_lookahead_must_be_a_length():
     with pytest.raises(ValueError, match="buffer_length"):
         Adaptivity(h_crack=0.01, buffer_length=-1.0)
+
+
+def test_size_tolerance_refines_while_the_longest_edge_exceeds_it_times_the_target():
+    """Adaptivity.size_tolerance: marked are the elements the indicator marks whose longest edge
+    exceeds size_tolerance times the target; refined until none is, the crack's elements end
+    between about half that bound and the bound, so with sqrt(2) the target lies inside, not at
+    the top of, the range of sizes."""
+    s = _damaged_notched_plate()
+    strict = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0))
+    loose = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0, size_tolerance=2 ** 0.5))
+    np.testing.assert_array_equal(loose, strict & (s.h > 0.03 * 2 ** 0.5 * (1 + 1e-9)))
+    assert strict.sum() > loose.sum() > 0
+    for _ in range(6):
+        marked = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0, size_tolerance=2 ** 0.5))
+        if not marked.any():
+            break
+        adapt.refine(s, marked)
+    assert not marked.any()
+    indicated = adapt.mark(s, Adaptivity(h_crack=1e-9, alpha_threshold=0.5, buffer=0))  # every indicated element
+    assert indicated.any() and s.h[indicated].max() <= 0.03 * 2 ** 0.5 * (1 + 1e-9)
+    with pytest.raises(ValueError, match="size_tolerance"):
+        Adaptivity(h_crack=0.01, size_tolerance=0.9)

@@ -221,3 +221,7 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     meta_amr = run_description(mod, dict(p, h_crack=2.0), res, {"h_crack": 2.0})
     with pytest.raises(StudyError, match="h_crack"):
         resume_parameters(meta_amr, mod, None, {"h_crack": 0}, tmp_path)
+    # a refined run recorded before amr_size_tolerance existed resumes at its value then (1)
+    old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_size_tolerance"}
+    assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
+    assert parameters_hash(dict(p, h_crack=2.0, amr_size_tolerance=1.41)) != parameters_hash(dict(p, h_crack=2.0))
