@@ -33,6 +33,8 @@ _WRAPPER = '''# ngtmc's cache of compiled expression code (ngtmc/cxx_cache.py); 
 import hashlib, os, shutil, subprocess, sys
 real = os.environ.get("NGTMC_REAL_NGSCXX") or {real!r}
 args = sys.argv[1:]
+if os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(real)), "ngscxx_cache.py")):
+    sys.exit("ngtmc cxx cache: the compiler it would call is a cache wrapper itself (%s)" % real)
 try:
     src = args[args.index("-c") + 1]
     obj = args[args.index("-o") + 1]
@@ -82,7 +84,9 @@ def activate(path: list[str]) -> list[str]:
     folder = cache_dir()
     if folder is None or os.name == "nt":  # on Windows NGSolve calls ngscxx.bat
         return path
-    real = shutil.which("ngscxx", path=os.pathsep.join(p for p in path if not p.startswith(str(folder) + os.sep)))
+    # the real ngscxx: never a wrapper of this or of another cache folder (a process started
+    # with NGTMC_CXX_CACHE set elsewhere inherits its parent's PATH, wrapper first)
+    real = shutil.which("ngscxx", path=os.pathsep.join(p for p in path if not _is_wrapper_folder(p)))
     if real is None:
         return path
     import hashlib
@@ -105,4 +109,9 @@ def activate(path: list[str]) -> list[str]:
         return path
     os.environ["NGTMC_REAL_NGSCXX"] = real
     os.environ["NGTMC_CXX_KEY"] = f"ngsolve {ngsolve.__version__}; python {sys.version}"
-    return [str(bin_dir)] + [p for p in path if not p.startswith(str(folder) + os.sep)]
+    return [str(bin_dir)] + [p for p in path if not _is_wrapper_folder(p)]
+
+
+def _is_wrapper_folder(folder: str) -> bool:
+    """Whether ``folder`` holds a cache wrapper (of any cache folder)."""
+    return os.path.isfile(os.path.join(folder, "ngscxx_cache.py"))

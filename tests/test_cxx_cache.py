@@ -52,3 +52,27 @@ def test_the_cache_can_be_turned_off(monkeypatch, tmp_path):
     assert cxx_cache.activate(path) == path
     monkeypatch.setenv("NGTMC_CXX_CACHE", str(tmp_path / "c"))
     assert cxx_cache.cache_dir() == tmp_path / "c"
+
+
+def test_a_process_with_another_cache_never_calls_a_wrapper_as_its_compiler(tmp_path, monkeypatch):
+    """A child process whose NGTMC_CXX_CACHE differs from its parent's inherits the parent's PATH,
+    the parent's wrapper first. Its real ngscxx must still be NGSolve's, not that wrapper: a
+    wrapper that calls a wrapper called itself without end (measured: processes until the
+    machine ran out of memory)."""
+    from ngtmc import discretisation
+    if discretisation._REAL_COMPILE_FAILED:
+        pytest.skip("no C++ compiler here")
+    import sysconfig
+    scripts = [sysconfig.get_path("scripts"), os.path.dirname(sys.executable)]
+    monkeypatch.setenv("NGTMC_CXX_CACHE", str(tmp_path / "parent"))
+    parent_path = cxx_cache.activate(list(scripts) + os.environ.get("PATH", "").split(os.pathsep))
+    assert os.path.isfile(os.path.join(parent_path[0], "ngscxx_cache.py"))
+    monkeypatch.setenv("NGTMC_CXX_CACHE", str(tmp_path / "child"))
+    child_path = cxx_cache.activate(parent_path)
+    real = os.environ["NGTMC_REAL_NGSCXX"]
+    assert not os.path.isfile(os.path.join(os.path.dirname(real), "ngscxx_cache.py")), real
+    assert child_path[0].startswith(str(tmp_path / "child")) and parent_path[0] not in child_path
+    # and a compilation through the child's PATH terminates, with NGSolve's compiler
+    monkeypatch.setenv("PATH", os.pathsep.join(parent_path))
+    first = _compile_in_a_new_process(tmp_path / "third")
+    assert first[0] == pytest.approx(first[1], rel=1e-13)
