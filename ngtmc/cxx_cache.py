@@ -86,7 +86,8 @@ def activate(path: list[str]) -> list[str]:
         return path
     # the real ngscxx: never a wrapper of this or of another cache folder (a process started
     # with NGTMC_CXX_CACHE set elsewhere inherits its parent's PATH, wrapper first)
-    real = shutil.which("ngscxx", path=os.pathsep.join(p for p in path if not _is_wrapper_folder(p)))
+    kept = [p for p in path if not _is_wrapper_folder(p)]
+    real = shutil.which("ngscxx", path=os.pathsep.join(kept))
     if real is None:
         return path
     import hashlib
@@ -109,7 +110,7 @@ def activate(path: list[str]) -> list[str]:
         return path
     os.environ["NGTMC_REAL_NGSCXX"] = real
     os.environ["NGTMC_CXX_KEY"] = f"ngsolve {ngsolve.__version__}; python {sys.version}"
-    return [str(bin_dir)] + [p for p in path if not _is_wrapper_folder(p)]
+    return [str(bin_dir)] + kept
 
 
 def _is_wrapper_folder(folder: str) -> bool:
