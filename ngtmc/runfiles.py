@@ -29,7 +29,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "CheckpointStore", "write_atomic", "write_json", "write_npz",
+__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "write_atomic", "write_json", "write_npz",
            "jsonable", "peak", "peak_index", "UNITS", "versions", "git_revision", "parameter_table", "physics_hash",
            "run_description", "parameters_hash", "process_info", "effective_status", "read_metadata",
            "resume_parameters"]

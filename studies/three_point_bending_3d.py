@@ -182,7 +182,9 @@ RESOLUTION_PARAMETERS = {
     "sphere_h_contact": ("mm", "hemisphere: element size in the void under the lowest point (sphere_contact_box)"),
     "sphere_h_indenter": ("mm", "hemisphere: element size in the hemisphere"),
     "sphere_h_beam": ("mm", "hemisphere: element size in the rest of the beam"),
-    "sphere_du_max": ("mm", "hemisphere: largest displacement step"),
+    "sphere_du_max": ("mm", "hemisphere: largest displacement step of the single-pass, staggered and monolithic "
+                             "schemes; under path following (the default) the bound is the larger of this and "
+                             "1/50 of the load path (ngtmc.schemes.PATH_STEPS), so a smaller value has no effect"),
     "sphere_stop_load": ("mm", "hemisphere: load at which the case stops"),
 }
 DEFAULT_RESOLUTION = "quick"
