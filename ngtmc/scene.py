@@ -239,11 +239,12 @@ class Scene:
         return Ranks(self.mesh).any(bool(np.any(self.element_density() < 1.0)))
 
     # ---------------------------------------------------------------- validation
-    def check(self) -> "Scene":
+    def check(self, refine_to: float | None = None) -> "Scene":
         """Validate every input; raise ValueError naming the parameter and the allowed range.
 
         Warns (:class:`ResolutionWarning`) when the smallest element in a fracture region is larger
-        than l0/2. Returns the scene."""
+        than l0/2, or, for a run that refines the crack's path as it goes (``refine_to``, mm: its
+        :attr:`ngtmc.Adaptivity.h_crack`), when that size is. Returns the scene."""
         mesh = self.mesh
         if not isinstance(mesh, ngs.Mesh):
             raise TypeError(f"Scene.mesh must be an ngsolve.Mesh, got {type(mesh).__name__}")
@@ -310,7 +311,7 @@ class Scene:
             raise ValueError(f"Scene.residual_stiffness = {self.residual_stiffness!r} is outside the allowed range [0, 1)")
         check_split(self.split, self.formulation, mesh.dim)
         if self.has_fracture:
-            self._check_resolution()
+            self._check_resolution(refine_to)
         self._checked = True
         return self
 
@@ -457,7 +458,7 @@ class Scene:
                 h = np.maximum(h, np.linalg.norm(pts[nodes[:, i]] - pts[nodes[:, j]], axis=1))
         return h
 
-    def _check_resolution(self):
+    def _check_resolution(self, refine_to: float | None = None):
         mats = self.mesh.GetMaterials()
         idx = np.array([el.index for el in self.mesh.Elements(ngs.VOL)])
         h = self.element_sizes()
@@ -468,6 +469,13 @@ class Scene:
                 continue
             h_min = float(h[sel].min())
             l0 = min(self.material_of(m).l0 for m in mats if re.fullmatch(r, m))
+            if refine_to is not None:
+                if refine_to > l0 / 2:
+                    warnings.warn(
+                        f"fracture region {r!r}: the run refines the crack's path to h_crack = {refine_to:.4g} mm, "
+                        f"larger than l0/2 = {l0 / 2:.4g} mm; the phase field is not resolved (h_crack <= l0/2, "
+                        "ideally l0/4)", ResolutionWarning, stacklevel=3)
+                continue
             if h_min > l0 / 2:
                 warnings.warn(
                     f"fracture region {r!r}: smallest element {h_min:.4g} mm is larger than l0/2 = {l0 / 2:.4g} mm; "

@@ -155,7 +155,7 @@ class Simulation(StepSchemes):
         self.control = control
         self.progress = progress
         self.max_steps = int(max_steps)
-        self.solver = Solver(scene, newton=newton, compile=compile)
+        self.solver = Solver(scene, newton=newton, compile=compile, refine_to=None if adapt is None else adapt.h_crack)
         if adapt is not None:
             from .adapt import check_solver
             check_solver(self.solver)

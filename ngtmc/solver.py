@@ -72,10 +72,15 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
     a warning where no C++ compiler is available), False evaluates them uncompiled, "auto" (default)
     chooses "real" on meshes of at least AUTO_REAL_COMPILE_ELEMENTS elements or
     AUTO_REAL_COMPILE_DOFS displacement dofs, and True below.
+
+    ``refine_to``: for a run that refines the crack's path as it goes, its target size h_crack
+    (mm, :class:`ngtmc.Adaptivity`): the resolution warning of :meth:`Scene.check` then judges
+    that size, not the initial mesh.
     """
 
-    def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool | str = "auto"):
-        scene.check()
+    def __init__(self, scene: Scene, newton: NewtonOptions | None = None, compile: bool | str = "auto",
+                 refine_to: float | None = None):
+        scene.check(refine_to)
         self.scene = scene
         # a copy: the options object passed in comes back unchanged (atol is filled in below)
         self.newton = dataclasses.replace(newton) if newton is not None else NewtonOptions()

@@ -104,6 +104,18 @@ def test_unresolved_length_scale_warns():
         tension_bar(l0=0.5, maxh=0.1).check()
 
 
+def test_a_run_that_refines_the_crack_path_is_judged_by_its_target_size():
+    """With adaptive refinement the initial mesh is coarse on purpose: the warning judges h_crack
+    (the size the crack's path is refined to), not the initial mesh."""
+    coarse = tension_bar(l0=0.05, maxh=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ngtmc.ResolutionWarning)
+        coarse.check(refine_to=0.0125)
+        ngtmc.Simulation(coarse, 0.01, ngtmc.AdaptiveStepControl(du_max=1e-3), adapt=ngtmc.Adaptivity(h_crack=0.0125))
+    with pytest.warns(ngtmc.ResolutionWarning, match=r"h_crack = 0.04 mm, larger than l0/2 = 0.025 mm"):
+        coarse.check(refine_to=0.04)
+
+
 def test_failure_at_minimum_step_keeps_the_history():
     """Newton limited to 3 iterations and no halving possible: the step where the void is squeezed
     hard fails, and the exception carries every accepted step."""

@@ -122,7 +122,8 @@ class _Run(RunFolder):
                 if bad:
                     raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
                 scene = case.build_scene()
-                scene.check()
+                adapt = (case.options or {}).get("adapt")
+                scene.check(getattr(adapt, "h_crack", None))
                 if self.comm is not None:  # what the distributed scene will refuse, refused before anything runs
                     from ..distributed import _refuse, _unsupported
                     _refuse(_unsupported(scene, (case.options or {}).get("adapt")))
