@@ -54,6 +54,8 @@ SOLVER_PARAMETERS = {
     "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
                                      "their target (Adaptivity.size_tolerance; 1: the target is a strict bound, and "
                                      "sizes end between half the target and the target; 1.41: centred on it)"),
+    "stop_after_drop": (0.0, "-", "stop each case once its force has fallen below this fraction of its peak, after "
+                                  "the peak (the crack has run; Simulation.stop_after_drop); 0: the whole schedule"),
 }
 _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
@@ -66,7 +68,7 @@ INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 
 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
 #: hashes and comparisons at that value, so that the runs still resume and compare.
-ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0}
+ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0}
 
 
 def effective_parameters(p: dict) -> dict:
@@ -96,6 +98,15 @@ def simulation_options(p: dict) -> dict:
     if compile_ not in _COMPILE:
         raise StudyError(f"compile = {compile_!r} is not one of {', '.join(_COMPILE)}")
     out = {"scheme": scheme, "compile": _COMPILE[compile_]}
+    drop = p.get("stop_after_drop", SOLVER_PARAMETERS["stop_after_drop"][0])
+    try:
+        drop = float(drop)
+    except (TypeError, ValueError):
+        raise StudyError(f"stop_after_drop = {drop!r} must be a fraction of the peak force in [0, 1)") from None
+    if not (0.0 <= drop < 1.0):
+        raise StudyError(f"stop_after_drop = {drop!r} must be in [0, 1) (0: the whole schedule)")
+    if drop > 0:
+        out["stop_after_drop"] = drop
     h_crack = p.get("h_crack", SOLVER_PARAMETERS["h_crack"][0])
     try:
         h_crack = float(h_crack)

@@ -445,3 +445,30 @@ def test_a_factor_that_fails_again_holds_the_ceiling_below_it():
     # restored from the checkpoint state
     path.set_state(state)
     assert path.sizing.failed_factor == CEILING_MIN and path.sizing.ceiling_held is True
+
+
+def test_stop_after_drop_ends_the_run_once_the_force_has_fallen():
+    """``stop_after_drop``: the run follows the same path as the whole schedule's and stops at the
+    first step after the peak whose force is below the fraction of it; the steps before are those
+    of the full run. Bad fractions are refused."""
+    sc = notched_plate(maxh=0.2, h_band=0.05, l0=0.1)
+    runs = {}
+    for drop in (None, 0.5):
+        # UMFPACK solves bitwise alike from run to run, so the two runs take the same steps
+        sim = ngtmc.Simulation(sc, 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=20.0), scheme="path-following",
+                               newton=ngtmc.NewtonOptions(linear_solver="umfpack"),
+                               coupled={"linear_solver": "umfpack"}, stop_after_drop=drop)
+        runs[drop] = sim.run().history
+        assert sim.finished
+    full, short = runs[None], runs[0.5]
+    F = full["force"].max()
+    assert short["force"].max() == F
+    assert 0 < len(short) < len(full) and short["load"].iloc[-1] < 0.012
+    assert short["force"].iloc[-1] < 0.5 * F <= short["force"].iloc[-2]
+    n = len(short)
+    np.testing.assert_array_equal(short["force"], full["force"][:n])
+    for bad in (0.0, 1.0, -0.1, float("nan")):
+        with pytest.raises(ValueError, match="stop_after_drop"):
+            ngtmc.Simulation(sc, 0.012, stop_after_drop=bad)
+    with pytest.raises(TypeError, match="stop_after_drop"):
+        ngtmc.Simulation(sc, 0.012, stop_after_drop="half")

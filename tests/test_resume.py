@@ -224,3 +224,18 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_size_tolerance"}
     assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
     assert parameters_hash(dict(p, h_crack=2.0, amr_size_tolerance=1.41)) != parameters_hash(dict(p, h_crack=2.0))
+    # so does a run recorded before stop_after_drop existed (the whole schedule, 0)
+    assert p["stop_after_drop"] == 0.0
+    assert parameters_hash({k: v for k, v in p.items() if k != "stop_after_drop"}) == parameters_hash(p)
+    assert parameters_hash(dict(p, stop_after_drop=0.5)) != parameters_hash(p)
+
+
+def test_stop_after_drop_setting():
+    """The study setting ``stop_after_drop`` becomes the Simulation option, 0 none; bad values are
+    refused with the setting's name."""
+    from ngtmc.study import simulation_options
+    assert "stop_after_drop" not in simulation_options({"stop_after_drop": 0.0})
+    assert simulation_options({"stop_after_drop": 0.5})["stop_after_drop"] == 0.5
+    for bad in (1.0, -0.5, "half"):
+        with pytest.raises(StudyError, match="stop_after_drop"):
+            simulation_options({"stop_after_drop": bad})
