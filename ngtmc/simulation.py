@@ -120,6 +120,7 @@ class Simulation(StepSchemes):
         need the peak and the drop (the crack has run), not the post-failure tail, which can cost
         most of a run (the quick Miehe set-up of the three-point bending: the tail from half the
         peak to 0.06 mm took about three quarters of its time). :attr:`finished` is then True.
+        Monotonic schedules only (unloading would drop the force too).
     compile : "auto", True, "real" or False
         How the energy expressions are compiled (see :class:`ngtmc.solver.Solver`).
     adapt : Adaptivity, optional
@@ -167,6 +168,10 @@ class Simulation(StepSchemes):
             if not (0.0 < stop_after_drop < 1.0):
                 raise ValueError(f"stop_after_drop = {stop_after_drop!r} is outside the allowed range (0, 1) "
                                  "(a fraction of the peak force; None: the whole schedule)")
+            if len(schedule.points) > 2:
+                raise ValueError(f"stop_after_drop needs a monotonic schedule (one segment); this one turns at "
+                                 f"{', '.join(f'{x:g}' for x in schedule.points[1:-1])} mm, where unloading would "
+                                 "drop the force and stop the run")
         self.stop_after_drop = stop_after_drop
         self.solver = Solver(scene, newton=newton, compile=compile, refine_to=None if adapt is None else adapt.h_crack)
         if adapt is not None:

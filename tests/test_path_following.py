@@ -472,3 +472,5 @@ def test_stop_after_drop_ends_the_run_once_the_force_has_fallen():
             ngtmc.Simulation(sc, 0.012, stop_after_drop=bad)
     with pytest.raises(TypeError, match="stop_after_drop"):
         ngtmc.Simulation(sc, 0.012, stop_after_drop="half")
+    with pytest.raises(ValueError, match="monotonic schedule.*turns at 0.01 mm"):
+        ngtmc.Simulation(sc, ngtmc.Schedule([0.0, 0.01, 0.0]), stop_after_drop=0.5)
