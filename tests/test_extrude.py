@@ -71,7 +71,7 @@ def test_plane_strain_slab_reproduces_the_2d_run_through_the_crack():
     so it is 10.5 times the 2D one per unit thickness, not 28 as for the residual's norm; both
     measured on the first step), and whether a dissipation step of the snap converges or is cut
     back is decided on a knife edge (measured: at crack_advance = l0, the default, the 3D run
-    converged a step of 0.54 N mm/mm that the 2D run cut back four times on one machine; on an
+    converged a step of 0.54 N mm/mm that the 2D run cut back three times (to 0.0675) on one machine; on an
     earlier one both took the same steps).
 
     The state after a crack run depends on how the steps sampled it (the history H is a maximum
