@@ -25,6 +25,9 @@ from pathlib import Path
 
 __all__ = ["cache_dir", "activate"]
 
+#: the wrapper script's file name, which also marks a folder as a wrapper folder
+_SCRIPT = "ngscxx_cache.py"
+
 _SHELL = '''#!/bin/sh
 exec "{python}" -I "{script}" "$@"
 '''
@@ -33,7 +36,7 @@ _WRAPPER = '''# ngtmc's cache of compiled expression code (ngtmc/cxx_cache.py); 
 import hashlib, os, shutil, subprocess, sys
 real = os.environ.get("NGTMC_REAL_NGSCXX") or {real!r}
 args = sys.argv[1:]
-if os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(real)), "ngscxx_cache.py")):
+if os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(real)), {script_name!r})):
     sys.exit("ngtmc cxx cache: the compiler it would call is a cache wrapper itself (%s)" % real)
 try:
     src = args[args.index("-c") + 1]
@@ -97,8 +100,8 @@ def activate(path: list[str]) -> list[str]:
     try:
         (folder / "objects").mkdir(parents=True, exist_ok=True)
         bin_dir.mkdir(parents=True, exist_ok=True)
-        script = bin_dir / "ngscxx_cache.py"
-        files = {script: _WRAPPER.format(real=real, objects=str(folder / "objects")),
+        script = bin_dir / _SCRIPT
+        files = {script: _WRAPPER.format(real=real, objects=str(folder / "objects"), script_name=_SCRIPT),
                  bin_dir / "ngscxx": _SHELL.format(python=sys.executable, script=script)}
         for file, text in files.items():
             if not file.is_file() or file.read_text() != text:
@@ -115,4 +118,4 @@ def activate(path: list[str]) -> list[str]:
 
 def _is_wrapper_folder(folder: str) -> bool:
     """Whether ``folder`` holds a cache wrapper (of any cache folder)."""
-    return os.path.isfile(os.path.join(folder, "ngscxx_cache.py"))
+    return os.path.isfile(os.path.join(folder, _SCRIPT))

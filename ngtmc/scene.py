@@ -461,13 +461,12 @@ class Scene:
     def _check_resolution(self, refine_to: float | None = None):
         mats = self.mesh.GetMaterials()
         idx = np.array([el.index for el in self.mesh.Elements(ngs.VOL)])
-        h = self.element_sizes()
+        h = self.element_sizes() if refine_to is None else None   # with refine_to the mesh is not judged
         for r in self.fracture_region_names:
             ids = [i for i, m in enumerate(mats) if re.fullmatch(r, m)]
             sel = np.isin(idx, ids)
             if not sel.any():
                 continue
-            h_min = float(h[sel].min())
             l0 = min(self.material_of(m).l0 for m in mats if re.fullmatch(r, m))
             if refine_to is not None:
                 if refine_to > l0 / 2:
@@ -476,6 +475,7 @@ class Scene:
                         f"larger than l0/2 = {l0 / 2:.4g} mm; the phase field is not resolved (h_crack <= l0/2, "
                         "ideally l0/4)", ResolutionWarning, stacklevel=3)
                 continue
+            h_min = float(h[sel].min())
             if h_min > l0 / 2:
                 warnings.warn(
                     f"fracture region {r!r}: smallest element {h_min:.4g} mm is larger than l0/2 = {l0 / 2:.4g} mm; "

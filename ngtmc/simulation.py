@@ -24,13 +24,13 @@ import numpy as np
 import pandas as pd
 
 from .path import N_S as PATH_N_S
-from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak, peak_index
 from .scene import Scene
 from .schemes import PATH_STEPS, SCHEMES, StepSchemes
 from .solver import NewtonOptions, Solver
 from .stepping import AdaptiveStepControl, ControlState, Schedule
 
-__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "PATH_STEPS", "simulate"]
+__all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "PATH_STEPS", "simulate", "check_stop_after_drop"]
 
 #: Units of the history columns (force and energies are for the scene thickness in 2D); defined
 #: once, in :mod:`ngtmc.runfiles`.
@@ -72,6 +72,21 @@ class SimulationResult:
         force is finite."""
         _, x = peak(self.history["force"], self.history["load"])
         return math.nan if x is None else x
+
+
+def check_stop_after_drop(value, schedule: Schedule | None = None):
+    """Raise TypeError or ValueError (naming ``stop_after_drop``) unless ``value`` is a fraction of
+    the peak force in (0, 1), and, with ``schedule``, unless that schedule is monotonic (one
+    segment: unloading would drop the force and stop the run)."""
+    from .materials import check_number
+    check_number("stop_after_drop", value, "dimensionless")
+    if not (0.0 < value < 1.0):
+        raise ValueError(f"stop_after_drop = {value!r} is outside the allowed range (0, 1) "
+                         "(a fraction of the peak force; None: the whole schedule)")
+    if schedule is not None and len(schedule.points) > 2:
+        raise ValueError(f"stop_after_drop needs a monotonic schedule (one segment); this one turns at "
+                         f"{', '.join(f'{x:g}' for x in schedule.points[1:-1])} mm, where unloading would "
+                         "drop the force and stop the run")
 
 
 class Simulation(StepSchemes):
@@ -163,15 +178,7 @@ class Simulation(StepSchemes):
         self.progress = progress
         self.max_steps = int(max_steps)
         if stop_after_drop is not None:
-            from .materials import check_number
-            check_number("stop_after_drop", stop_after_drop, "dimensionless")
-            if not (0.0 < stop_after_drop < 1.0):
-                raise ValueError(f"stop_after_drop = {stop_after_drop!r} is outside the allowed range (0, 1) "
-                                 "(a fraction of the peak force; None: the whole schedule)")
-            if len(schedule.points) > 2:
-                raise ValueError(f"stop_after_drop needs a monotonic schedule (one segment); this one turns at "
-                                 f"{', '.join(f'{x:g}' for x in schedule.points[1:-1])} mm, where unloading would "
-                                 "drop the force and stop the run")
+            check_stop_after_drop(stop_after_drop, schedule)
         self.stop_after_drop = stop_after_drop
         self.solver = Solver(scene, newton=newton, compile=compile, refine_to=None if adapt is None else adapt.h_crack)
         if adapt is not None:
@@ -255,10 +262,8 @@ class Simulation(StepSchemes):
         if self.stop_after_drop is None or len(self.rows) < 2:
             return False
         f = np.array([r["force"] for r in self.rows], dtype=float)
-        if not np.isfinite(f).any():
-            return False
-        i = int(np.nanargmax(f))
-        return bool(f[i] > 0 and i < f.size - 1 and f[-1] < self.stop_after_drop * f[i])
+        i = peak_index(f)
+        return bool(i is not None and f[i] > 0 and i < f.size - 1 and f[-1] < self.stop_after_drop * f[i])
 
     # ------------------------------------------------------------------ one step
 

@@ -99,14 +99,13 @@ def simulation_options(p: dict) -> dict:
         raise StudyError(f"compile = {compile_!r} is not one of {', '.join(_COMPILE)}")
     out = {"scheme": scheme, "compile": _COMPILE[compile_]}
     drop = p.get("stop_after_drop", SOLVER_PARAMETERS["stop_after_drop"][0])
-    try:
-        drop = float(drop)
-    except (TypeError, ValueError):
-        raise StudyError(f"stop_after_drop = {drop!r} must be a fraction of the peak force in [0, 1)") from None
-    if not (0.0 <= drop < 1.0):
-        raise StudyError(f"stop_after_drop = {drop!r} must be in [0, 1) (0: the whole schedule)")
-    if drop > 0:
-        out["stop_after_drop"] = drop
+    if not (isinstance(drop, (int, float)) and not isinstance(drop, bool) and drop == 0):
+        from .simulation import check_stop_after_drop
+        try:
+            check_stop_after_drop(drop)
+        except (TypeError, ValueError) as e:
+            raise StudyError(f"{e}; as a study setting, 0 runs the whole schedule") from None
+        out["stop_after_drop"] = float(drop)
     h_crack = p.get("h_crack", SOLVER_PARAMETERS["h_crack"][0])
     try:
         h_crack = float(h_crack)
