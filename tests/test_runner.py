@@ -348,3 +348,17 @@ def test_auto_threads_are_chosen_and_recorded_per_case(tmp_path, monkeypatch):
     out = run_study(mod, output=tmp_path / "one", report=False, progress=False, threads=1)   # explicit: every case
     meta = json.loads((out / "metadata.json").read_text())
     assert {c["name"]: c["threads"] for c in meta["cases"]} == {"a": 1, "b": 1}
+
+
+def test_a_coarse_case_warns_once(tmp_path):
+    """A case whose fracture mesh is coarser than l0/2 gets one ResolutionWarning, from its solver:
+    the runner's check of every case before the run refuses bad input but leaves the warning to it."""
+    import warnings
+    mod = tiny_study(final_load=0.001)
+    mod.RESOLUTIONS["quick"]["h"] = 0.08          # l0/2 = 0.05 mm
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        run_study(mod, output=tmp_path / "run", report=False, progress=False, threads=1, vtk=False)
+    res = [w for w in seen if issubclass(w.category, ngtmc.ResolutionWarning)]
+    assert len(res) == 1, [str(w.message) for w in res]
+    assert "l0/2" in str(res[0].message)

@@ -6,11 +6,13 @@ allow to take over), validation of every case before anything is solved, and eac
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 import pandas as pd
 
 from ..plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput
+from ..scene import ResolutionWarning
 from ..snapshots import Snapshots
 from ..study import Case, StudyError
 from .folder import _CONTROL_SETTINGS, RunFolder, _mesh_info, _threads, case_results
@@ -123,7 +125,9 @@ class _Run(RunFolder):
                     raise TypeError(f"unknown Simulation options {bad}; allowed: {', '.join(sorted(allowed))}")
                 scene = case.build_scene()
                 adapt = (case.options or {}).get("adapt")
-                scene.check(getattr(adapt, "h_crack", None))
+                with warnings.catch_warnings():  # errors here; its warnings once, from the case's Solver
+                    warnings.simplefilter("ignore", ResolutionWarning)
+                    scene.check(getattr(adapt, "h_crack", None))
                 if self.comm is not None:  # what the distributed scene will refuse, refused before anything runs
                     from ..distributed import _refuse, _unsupported
                     _refuse(_unsupported(scene, (case.options or {}).get("adapt")))
