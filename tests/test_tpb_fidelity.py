@@ -147,6 +147,11 @@ def test_linear_elastic_reference_of_the_study_beam():
 #: more of the curve)
 WINDOW = {"loading": "window", "stop_load": 0.06, "stop_after_drop": 0.5}
 
+#: the variants compared with it by their peaks: stopped below 0.8 of their peak, past it (measured
+#: on the window variant, one thread: the peak after 20 s, below 0.8 of it after 35 s, below half
+#: after 56 s)
+PAST_THE_PEAK = {"stop_after_drop": 0.8}
+
 
 @pytest.fixture(scope="module")
 def window_run(tmp_path_factory):
@@ -188,7 +193,7 @@ def test_ambatis_own_set_up_peaks_where_ambati_does(window_run):
 def v_window_run(tmp_path_factory):
     """The window variant with a V-notch of the same depth and mouth width (``--set loading=window
     --set notch_shape=v``) at quick, the study's default scheme, past its peak."""
-    return solve_quick(tmp_path_factory, "v_window", {**WINDOW, "notch_shape": "v"})[0]
+    return solve_quick(tmp_path_factory, "v_window", {**WINDOW, **PAST_THE_PEAK, "notch_shape": "v"})[0]
 
 
 @pytest.mark.slow
@@ -212,8 +217,9 @@ SMALL_MOVERS = {"spectral": {"split": "spectral"},
 
 @pytest.fixture(scope="module", params=list(SMALL_MOVERS))
 def small_mover_run(request, tmp_path_factory):
-    """The window variant with one of SMALL_MOVERS, solved past its peak (stopped at 0.05 mm)."""
-    return request.param, solve_quick(tmp_path_factory, request.param, {**WINDOW, "stop_load": 0.05,
+    """The window variant with one of SMALL_MOVERS, solved past its peak (stopped below 0.8 of it, or at
+    0.05 mm)."""
+    return request.param, solve_quick(tmp_path_factory, request.param, {**WINDOW, **PAST_THE_PEAK, "stop_load": 0.05,
                                                                     **SMALL_MOVERS[request.param]})
 
 
@@ -221,12 +227,12 @@ def small_mover_run(request, tmp_path_factory):
 def test_the_split_and_the_fracture_exclusions_do_not_close_the_gap(window_run, small_mover_run):
     """Issue 15's candidate (a), the split, and the exclusion under the load, each solved past its peak:
     none moves the window variant's peak by 3 % (the flat notch's peak scatters by 1.5 % between
-    meshes, docs/fidelity.md), so none explains the 11.5 % between it and Ambati's 42 N/mm. The crack
-    has run (the force has fallen below half the peak)."""
+    meshes, docs/fidelity.md), so none explains the 11.5 % between it and Ambati's 42 N/mm. The run
+    is past its peak (the force has fallen below 0.8 of it)."""
     name, (r, h, _) = small_mover_run
     flat = window_run[0]["peak_force"]
     change = r["peak_force"] / flat - 1.0
     print(f"{name}: {r['peak_force']:.3f} against {flat:.3f} N/mm ({100 * change:+.2f} %)")
     assert abs(change) < 0.03
     assert r["peak_force"] < 0.92 * 42.0
-    assert h["force"].iloc[-1] < 0.5 * r["peak_force"]
+    assert h["force"].iloc[-1] < PAST_THE_PEAK["stop_after_drop"] * r["peak_force"]
