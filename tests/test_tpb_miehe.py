@@ -7,12 +7,12 @@ with the study's l0 = 0.03 mm, 35.67 N/mm at 0.0378 mm with l0 = 0.06 mm, agains
 at 0.0390 mm (docs/fidelity.md). The schedule goes to 0.06 mm, as measured: to 0.045 mm (path steps
 bounded by 1/50 of the load path, so a slightly different path) the run met an arrested crack at
 22.2 N/mm and 0.0371 mm, where its displacement steps took 10-35 s each (peak 36.78 N/mm at
-0.0380 mm; benchmarks record quick-20261203T071844Z, interrupted). The run stops once the force
-has fallen below 0.8 of the peak (``stop_after_drop``): the same path to there, and the peak is
-past (measured 2026-12-03: the peak at step 32 after 97 s, the force below 0.8 of it at step 40
-after 184 s, below half at step 56 after 327 s; the tail to 0.06 mm took most of the run). The
-tests read the peak only, so the run stops below 0.9 of it: measured the same day on one thread,
-the peak at step 32 after 73 s, below 0.9 at step 36 after 98 s, below 0.8 at step 40 after 131 s.
+0.0380 mm; benchmarks record quick-20261203T071844Z, interrupted). The tests read the peak only,
+so the run stops once the force has fallen below 0.9 of it (``stop_after_drop``): the same path to
+there, and the peak is past. Measured 2026-12-03: the peak at step 32 after 97 s, the force below
+0.8 of it at step 40 after 184 s, below half at step 56 after 327 s (the tail to 0.06 mm took most
+of the run); later that day on one thread, the peak after 73 s, below 0.9 at step 36 after 98 s,
+below 0.8 after 131 s.
 """
 from __future__ import annotations
 
