@@ -167,7 +167,7 @@ def private_scene(scene):
     density = scene.density
     if density is not None and not isinstance(density, Mapping):
         density = np.array(density, dtype=float, copy=True)
-    return dataclasses.replace(scene, mesh=copy, density=density, _checked=False)
+    return dataclasses.replace(scene, mesh=copy, density=density)
 
 
 def check_solver(solver):

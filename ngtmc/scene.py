@@ -13,7 +13,7 @@ energies are reported for that thickness.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 import math
 import re
 import warnings
@@ -166,7 +166,6 @@ class Scene:
     split: str = DEFAULT_SPLIT
     formulation: str = DEFAULT_FORMULATION
     force_from: str | None = None
-    _checked: bool = field(default=False, repr=False)
 
     def __post_init__(self):
         if self.thickness is None and getattr(self.mesh, "dim", 2) == 2:
@@ -312,7 +311,6 @@ class Scene:
         check_split(self.split, self.formulation, mesh.dim)
         if self.has_fracture:
             self._check_resolution(refine_to)
-        self._checked = True
         return self
 
     def _check_conditions(self, need_boundary):

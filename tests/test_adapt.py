@@ -194,7 +194,7 @@ def test_refined_resolve_converges_and_agrees_with_a_mesh_refined_beforehand():
     assert s.solve_displacement(s.load).iterations == 0
     # the same loads on the final mesh from the start
     final = res.solver.scene
-    _, ref = _run(dataclasses.replace(final, mesh=_copy_mesh(final.mesh), _checked=False))
+    _, ref = _run(dataclasses.replace(final, mesh=_copy_mesh(final.mesh)))
     step_refined = max(step for step, _ in sim.refinements)
     f_amr = h["force"].to_numpy()[step_refined:]
     f_ref = ref.history["force"].to_numpy()[step_refined:]
@@ -332,7 +332,7 @@ def test_path_following_runs_with_refinement():
     assert force[-1] < 0.1 * force.max()     # the plate is broken
     assert sim.coupled.solve(sim.solver.load).iterations == 0
     final = sim.solver.scene
-    ref = ngtmc.Simulation(dataclasses.replace(final, mesh=_copy_mesh(final.mesh), _checked=False),
+    ref = ngtmc.Simulation(dataclasses.replace(final, mesh=_copy_mesh(final.mesh)),
                            ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following").run().history
     print(f"\npath following with refinement: {len(h) - 1} steps, refined after steps {refined_steps}, "
           f"{h['elements'].iloc[0]} -> {h['elements'].iloc[-1]} elements, peak {force.max():.6g} N/mm; "
@@ -348,7 +348,7 @@ def test_coupled_newton_follows_the_refined_mesh_without_a_rebuild():
     from ngtmc.coupled import CoupledNewton
     base = two_blocks(maxh=0.2, void_maxh=0.05)
     scene = adapt.private_scene(dataclasses.replace(
-        base, materials={".*": ngtmc.Material(1000.0, 0.3, 0.05, 0.1)}, fracture_regions="lower|upper", _checked=False))
+        base, materials={".*": ngtmc.Material(1000.0, 0.3, 0.05, 0.1)}, fracture_regions="lower|upper"))
     s = ngtmc.Solver(scene, compile=True)
     c = CoupledNewton(s)
     form = c.form
@@ -394,7 +394,7 @@ def test_refined_space_keeps_order_one_outside_the_regulariser():
     marked = band & (np.random.default_rng(0).uniform(size=s.mesh.ne) < 0.2)
     assert marked.sum() > 20
     adapt.refine(s, marked)
-    fresh = ngtmc.Solver(dataclasses.replace(s.scene, mesh=_copy_mesh(s.mesh), _checked=False), compile=False)
+    fresh = ngtmc.Solver(dataclasses.replace(s.scene, mesh=_copy_mesh(s.mesh)), compile=False)
     assert s.fes_u.ndof == fresh.fes_u.ndof
     # the trap itself, on a second copy of the coarse scene
     bare = adapt.private_scene(mod.build_scene(p))
