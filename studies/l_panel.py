@@ -199,6 +199,33 @@ Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
   first loading stops before the peak (it lies at 6.451 and 6.311 mm), so their "reload peak"
   (23.6 and 20.8 kN) is the first peak of the uncracked panel: a different quantity, not a
   +211 % error of the model. What is left is +16 % at l0 = 1.1875 mm, the paper's own mesh size.
+* **The paper's scheme does not explain the +16 %** (measured 2026-12-03,
+  ``MEASURED["quick_turn_past_the_peak_2026_12_03"]``). The paper solves each step once with the
+  history of the step before (single-pass); its damage lags and keeps growing while the load
+  falls, which could lengthen the crack before reloading and so lower the reload peak. Tested at
+  quick with the turning point past the first-loading peak, as at the paper's resolution
+  (``--set load_cases=cyclic --set schedule=0,6.6,6,7``), once per scheme:
+
+  ===============================  ================  ================
+  quick, turning point 6.6 mm       path following    single-pass
+  ===============================  ================  ================
+  first-loading peak                18.55 kN          22.96 kN
+  force at the turning point        9.38 kN           17.16 kN
+  W_f at the turning point          5856 N mm         4695 N mm
+  W_f growth while unloading        0                 +2122 N mm (+45 %)
+  **reload peak**                   **9.86 kN**       **10.16 kN**
+  force at 7 mm                     9.46 kN           8.81 kN
+  steps, Newton iterations          157, 775          348, 787
+  ===============================  ================  ================
+
+  The single-pass crack catches up while unloading (its W_f ends 16 % above path following's at
+  6.0 mm), yet its reload peak is 3 % *higher*, not lower. So the scheme moves the reload peak by
+  a few per cent, in the wrong direction to explain the paper's 7.6 kN. Not measured: the
+  single-pass scheme at the paper's resolution (hours), where the crack run and the turning
+  point are the paper's. At the paper's resolution the reload peak is 28.6 % above the force at
+  the turning point (8.83 against 6.87 kN; at quick 5.1 %): the crack arrested at 6.3 mm and
+  restarts at 6.64 mm. A longer crack at the turning point would lower that restart force; what
+  sets its length in the paper's run is not in its text.
 
 l0 sweep (case ``monotonic``, quick; ``L0_SWEEP``)
 ---------------------------------------------------
@@ -242,6 +269,9 @@ import numpy as np
 import ngtmc
 from ngtmc.runfiles import peak_index
 from ngtmc.study import SOLVER_PARAMETERS, Case, data_path, simulation_options
+from ngtmc.studies._l_panel_geometry import (_segment, build_mesh, effective_gap,  # noqa: F401 (interface)
+                                            effective_schedule)
+from ngtmc.studies._l_panel_measured import L0_SWEEP, L0_SWEEP_COMMAND, MEASURED  # noqa: F401 (records)
 
 NAME = "l_panel"
 TITLE = "L-shaped panel: load, unload, reload through an indenter"
@@ -295,157 +325,6 @@ RESOLUTION_PARAMETERS = {
 }
 DEFAULT_RESOLUTION = "quick"
 
-#: Measured with ngtmc.run_study on a shared, heavily loaded 2-core machine (wall times inflated).
-#: Forces in N for the whole 100 mm panel; W_f (fracture_energy) in N mm for the whole panel.
-MEASURED = {
-    "quick": {"elements": 8516, "ndof_u": 8680, "ndof_alpha": 4340, "steps": 291, "newton_iterations": 660,
-              "cutbacks": 4, "wall_time_s": 552, "first_loading_force_at_6.3": 17936,
-              "force_first_loading_at_gap": 4765, "force_unloaded_at_gap": 4484, "wf_at_turning_point": 62.1,
-              "unload_wf_lag": 4.83, "unload_wf_change_after_settle": 0.0, "reload_peak_force": 23621,
-              "reload_peak_load": 6.46, "final_force": 8993},
-    "quick_with_du_min_1e-8": {"note": "stopped at 6.536 mm after 459 steps (crack tail)",
-                               "first_loading_force_at_6.3": 17935, "reload_peak_force": 22070,
-                               "reload_peak_load": 6.378},
-    "medium": {"elements": 27986, "ndof_u": 28204, "ndof_alpha": 14102, "steps": 1102, "newton_iterations": 2040,
-               "cutbacks": 0, "wall_time_s": 2714, "linear_solve_time_s": 181, "first_loading_force_at_6.3": 18211,
-               "force_first_loading_at_gap": 4574, "force_unloaded_at_gap": 4505, "wf_at_turning_point": 82.5,
-               "unload_wf_lag": 17.5, "unload_wf_change_after_settle": 0.0, "reload_peak_force": 20843,
-               "reload_peak_load": 6.35, "final_force": 7222, "status": "completed"},
-    "quick_segment_loading": {"note": "--set load_introduction=segment: no indenter, no void (loads minus the gap)",
-                              "elements": 7996, "steps": 160, "wall_time_s": 188, "first_loading_force_at_0.3": 18541,
-                              "reload_peak_force": 24400, "reload_peak_load": 0.449},
-    "quick_monotonic": {"note": "case monotonic, 0 -> 6.6 mm (one core, one thread)", "elements": 8516,
-                        "steps": 198, "newton_iterations": 438, "wall_time_s": 65, "peak_force": 22962,
-                        "peak_load": 6.451, "force_at_6.6": 17161, "drop_after_peak": 0.253},
-    "medium_monotonic": {"note": "--set load_cases=monotonic --set monotonic_to=6.5, stopped at 6.3148 mm after the "
-                                 "drop (crack running in steps of 1e-5 mm)", "elements": 27986, "steps": 238,
-                         "wall_time_s": 216, "peak_force": 18632, "peak_load": 6.3106, "force_at_stop": 13675,
-                         "status": "interrupted"},
-    "quick_unload_single_pass": {"note": "--set load_cases=cyclic --set schedule=0,6.3,6,6.3", "steps": 153,
-                                 "newton_iterations": 371, "wall_time_s": 55, "force_at_turning_point": 17936,
-                                 "wf_at_turning_point": 62.10, "unload_wf_lag": 4.83, "max_alpha_after_lag": 0.4415,
-                                 "force_unloaded_at_gap": 4484},
-    "quick_path_following": {"note": "--set scheme=path-following, both cases (2026-11-25, two other jobs running)",
-                             "monotonic_peak_force": 18445, "monotonic_peak_load": 6.302, "monotonic_steps": 155,
-                             "monotonic_newton_iterations": 676, "main_steps": 169, "main_newton_iterations": 762,
-                             "first_loading_peak_force": 18079, "reload_peak_force": 18598, "reload_peak_load": 6.311,
-                             "wall_time_s": 535, "status": "completed"},
-    "quick_path_following_no_ceiling": {"note": "ngtmc run l-panel --set scheme=path-following --workers 2, both "
-                                                "cases (2026-12-02 evening): no growth ceiling, du_min 1e-6 mm, "
-                                                "the fallback of displacement steps (docs/performance.md)",
-                                        "main_steps": 152, "main_newton_iterations": 678, "main_cutbacks": 9,
-                                        "reload_peak_force": 18597.5, "reload_peak_load": 6.3108,
-                                        "monotonic_steps": 129, "monotonic_newton_iterations": 654,
-                                        "monotonic_cutbacks": 13, "monotonic_peak_force": 18620.7,
-                                        "monotonic_peak_load": 6.3064, "main_wall_time_s": 217,
-                                        "monotonic_wall_time_s": 230, "status": "completed"},
-    "quick_path_following_2026_12_02": {"note": "--set scheme=path-following --workers 2, both cases, idle machine "
-                                                "(2026-12-02, commit 2333a3a). The monotonic case had failed at "
-                                                "6.284 mm where its crack arrested (a bordered Newton step asking "
-                                                "for a load change of 5e11 mm), since at least 2026-12-01; with "
-                                                "ngtmc.path.LOAD_STEP_LIMIT (now rule 3 of ngtmc.path) it takes displacement steps there. "
-                                                "Both cases with the final rule (commit dedeec6; monotonic alone, "
-                                                "main beside another job). The rule's first version (commit "
-                                                "2333a3a, --workers 2, 400 s): monotonic 368 steps, 1350 "
-                                                "iterations; main 294 steps, 1077 iterations; the same forces",
-                                        "monotonic_peak_force": 18621, "monotonic_peak_load": 6.3064,
-                                        "monotonic_steps": 370, "monotonic_newton_iterations": 1242,
-                                        "monotonic_cutbacks": 15, "monotonic_wall_time_s": 249,
-                                        "monotonic_final_force": 9386, "main_steps": 294,
-                                        "main_newton_iterations": 978, "main_cutbacks": 7, "main_wall_time_s": 181,
-                                        "first_loading_force_at_6.3": 18079, "unload_wf_lag": 0.0,
-                                        "reload_peak_force": 18598, "reload_peak_load": 6.3108, "main_final_force": 8309,
-                                        "status": "completed"},
-    "paper_single_pass_partial": {"note": "ngtmc run l-panel -r paper (the study's defaults: single-pass, Eq. 20, "
-                                          "du_max 0.01 mm, du_min 1e-8 mm), one thread, one or two other jobs on the "
-                                          "machine (2026-11-25); stopped in the crack run of the first loading at "
-                                          "6.2854 mm after 874 steps, 1384 Newton iterations and 4738 s (about 850 s of it "
-                                          "stopped with SIGSTOP while another run was timed): steps of "
-                                          "1.6e-5..5e-5 mm, about a day to the end of the schedule at that pace",
-                                  "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355, "steps": 874, "newton_iterations": 1384, "wall_time_s": 4738,
-                                  "force_at_6.0": 5050, "first_loading_peak_force": 17257,
-                                  "first_loading_peak_load": 6.274, "force_at_stop": 8354, "status": "interrupted"},
-    "paper_path_following_partial": {"note": "ngtmc run l-panel -r paper --set scheme=path-following --workers 2 (both "
-                                             "cases at once, one thread each, beside test and benchmark runs on the 2 "
-                                             "cores: wall times are upper bounds), 2026-12-01; interrupted once and "
-                                             "resumed (--resume), then stopped in the crack run (first stop below; "
-                                             "resumed again on 2026-12-01 and stopped at the *_stop2 entries: 41 and "
-                                             "37 more steps, crack about 47 mm long by the dissipated energy 419.6 N mm "
-                                             "/ (Gc t), 5.2 N mm, about l0/2, per step on average). Each crack-run step "
-                                             "dissipated one l0 of crack (W_f + 10.6 N mm = Gc l0 x 100 mm) in 4-6 Newton "
-                                             "iterations and 35-80 s; two crack-run steps were cut back (34 and 22 iterations: "
-                                             "at twice and at once that dissipation), so it stayed at one l0 or below",
-                                     "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355, "setup_s": 106,
-                                     "monotonic_steps": 79, "monotonic_newton_iterations": 320, "monotonic_cutbacks": 3,
-                                     "monotonic_wall_time_s": 3141, "monotonic_peak_force": 15723,
-                                     "monotonic_peak_load": 6.2417, "monotonic_force_at_stop": 13338,
-                                     "monotonic_load_at_stop": 6.2197, "monotonic_wf_at_stop": 415.1,
-                                     "main_steps": 69, "main_newton_iterations": 289, "main_cutbacks": 3,
-                                     "main_wall_time_s": 3215, "first_loading_peak_force": 15746,
-                                     "first_loading_peak_load": 6.2422, "main_force_at_stop": 13654,
-                                     "main_load_at_stop": 6.2201, "status": "interrupted",
-                                     "monotonic_steps_stop2": 120, "monotonic_newton_iterations_stop2": 546,
-                                     "monotonic_cutbacks_stop2": 5, "monotonic_wall_time_s_stop2": 6694,
-                                     "monotonic_load_at_stop2": 6.2117, "monotonic_force_at_stop2": 11525,
-                                     "monotonic_dissipated_at_stop2": 419.6,
-                                     "main_steps_stop2": 106, "main_newton_iterations_stop2": 524,
-                                     "main_cutbacks_stop2": 6, "main_wall_time_s_stop2": 6781,
-                                     "main_load_at_stop2": 6.2074, "main_force_at_stop2": 11489},
-    "paper_path_following_2026_12_02": {"note": "ngtmc run l-panel -r paper --set scheme=path-following --workers 2, "
-                                               "started 2026-12-02 and resumed across sessions (one or two threads, "
-                                               "often beside other jobs); stopped in the crack run. Case main failed at "
-                                               "step 193 (6.2078 mm) before the fixes of that night (docs/performance.md, "
-                                               "'The paper L-panel's crawl'); the last hour (23:29-00:24, both cases on "
-                                               "two workers): main steps 193-225 (596 Newton iterations, 16 cut-backs, "
-                                               "3185 s), monotonic 151-184 (535, 20, 3248 s); then 00:37-01:04: main "
-                                               "226-245 (310, 13, 1612 s), monotonic 185-204 (253, 8, 1514 s)",
-                                       "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355,
-                                       "first_loading_peak_force": 16006, "first_loading_peak_load": 6.2479,
-                                       "monotonic_peak_force": 15729, "monotonic_peak_load": 6.2419,
-                                       "main_steps": 245, "main_newton_iterations": 2134, "main_cutbacks": 59,
-                                       "main_wall_time_s": 13515, "main_load_at_stop": 6.2114,
-                                       "main_force_at_stop": 7518, "main_dissipated_at_stop": 1005.3,
-                                       "monotonic_steps": 204, "monotonic_newton_iterations": 1590,
-                                       "monotonic_cutbacks": 53, "monotonic_wall_time_s": 9757,
-                                       "monotonic_load_at_stop": 6.2070, "monotonic_force_at_stop": 8381,
-                                       "monotonic_dissipated_at_stop": 867.8, "status": "interrupted"},
-    "paper_path_following_completed_2026_12_03": {
-        "note": "the run above, resumed on 2026-12-03 with the weak-step stall and growth_ceiling='auto' "
-                "(docs/performance.md) from main step 245 and monotonic step 204, completed (04:19-05:34, "
-                "two workers, a third job on the two cores most of the time); case times accumulated over sessions",
-        "elements": 102359, "ndof_u": 102710, "ndof_alpha": 51355,
-        "main_steps": 361, "main_newton_iterations": 2760, "main_cutbacks": 73, "main_wall_time_s": 17134,
-        "main_peak_memory_mb": 745, "first_loading_peak_force": 16006, "first_loading_peak_load": 6.2479,
-        "force_at_turning_point": 6868, "force_first_loading_at_gap": 5312, "force_unloaded_at_gap": 2676,
-        "reload_peak_force": 8830, "reload_peak_load": 6.6395, "final_force": 6752,
-        "dissipated_at_turning_point": 1422.0, "dissipated_final": 4937.4,
-        "monotonic_steps": 323, "monotonic_newton_iterations": 2314, "monotonic_cutbacks": 69,
-        "monotonic_wall_time_s": 13954, "monotonic_peak_force": 15729, "monotonic_peak_load": 6.2419,
-        "monotonic_final_force": 8790, "status": "completed"},
-    "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
-                                "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
-                                "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
-                                "force_unloaded_at_gap": 4483},
-}
-
-#: The l0 sweep (study docstring, "l0 sweep"): case ``monotonic`` (0 -> 6.6 mm) at quick, one run per
-#: row, reproduced by L0_SWEEP_COMMAND with the row's l0 (and h_far where it differs from quick's
-#: 25 mm). Forces in N for the whole 100 mm panel, loads in mm, wall time in s of the case on one
-#: core (one thread). A measurement: no row was chosen to meet a reference.
-L0_SWEEP_COMMAND = ("ngtmc run l-panel --resolution quick --set load_cases=monotonic --set l0={l0} "
-                    "[--set h_far={h_far}] --no-report")
-L0_SWEEP = [
-    {"l0": 1.1875, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 22962, "peak_load": 6.451,
-     "force_at_6.6": 17161, "steps": 198, "wall_time_s": 65},
-    {"l0": 4.75, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 16413, "peak_load": 6.310,
-     "force_at_6.6": 3824, "steps": 214, "wall_time_s": 67},
-    {"l0": 12.0, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 14061, "peak_load": 6.276,
-     "force_at_6.6": 554, "steps": 221, "wall_time_s": 72},
-    {"l0": 33.33, "h_band": 2.0, "h_far": 25.0, "elements": 8516, "peak_force": 11634, "peak_load": 6.259,
-     "force_at_6.6": 32, "steps": 210, "wall_time_s": 66},
-    {"l0": 33.33, "h_band": 2.0, "h_far": 8.0, "elements": 13845, "peak_force": 11554, "peak_load": 6.259,
-     "force_at_6.6": 21, "steps": 212, "wall_time_s": 118},
-]
 #: Winkler's experimental peak band (whole 100 mm panel, N): the paper's 7.6 kN is its upper bound.
 WINKLER_PEAK_BAND = (6700.0, 7600.0)
 #: Concrete's tensile strength (Winkler), MPa: the strength l0_for_strength matches in the sweep.
@@ -491,71 +370,6 @@ def figures(p: dict) -> list[dict]:
 
 REGIONS = "band|contact_zone|clamp_strip|panel|indenter|void"
 FRACTURE_REGIONS = ["band", "panel"]
-
-
-def _segment(p: dict) -> bool:
-    mode = str(p.get("load_introduction", "indenter"))
-    if mode not in ("indenter", "segment"):
-        raise ValueError(f"l_panel: load_introduction = {mode!r} is not one of 'indenter', 'segment'")
-    return mode == "segment"
-
-
-def effective_gap(p: dict) -> float:
-    """Gap crossed before the panel is loaded, mm: ``gap`` with the indenter, 0 for segment loading."""
-    return 0.0 if _segment(p) else float(p["gap"])
-
-
-def effective_schedule(p: dict) -> list:
-    """Imposed displacement turning points, mm (the schedule minus the gap for segment loading)."""
-    shift = float(p["gap"]) - effective_gap(p)
-    sched = [float(x) for x in p["schedule"]]
-    return [sched[0]] + [x - shift for x in sched[1:]]
-
-
-def build_mesh(p: dict):
-    """Mesh with regions ``band``, ``contact_zone``, ``panel``, ``clamp_strip`` (the panel),
-    ``indenter`` and ``void``; boundaries ``clamp`` (y = 0) and ``load`` (indenter's flat edge).
-    With ``load_introduction = 'segment'``: no indenter and no void, ``load`` is the arm's lower
-    face from x = load_x to 500 mm."""
-    from netgen.occ import Circle, Glue, MoveTo, OCCGeometry, Pnt, Y
-    import ngsolve as ngs
-
-    gap, R, xl = float(p["gap"]), float(p["indenter_radius"]), float(p["load_x"])
-    margin, cs = float(p["void_margin"]), float(p["clamp_strip"])
-    if not (xl + R < 500 and xl - R - margin > 250):
-        raise ValueError("l_panel geometry: the indenter and its void must fit under the arm (250 < x < 500)")
-    outer = MoveTo(0, 0).LineTo(250, 0).LineTo(250, 250).LineTo(500, 250).LineTo(500, 500).LineTo(0, 500).Close().Face()
-    band = MoveTo(150, 230).Rectangle(110, 90).Face() * outer
-    if _segment(p):  # a vertex at x = load_x splits the arm's lower face: the load segment is its own edge
-        cz = MoveTo(xl - 40, 250).LineTo(xl, 250).LineTo(500, 250).LineTo(500, 270).LineTo(xl - 40, 270).Close().Face()
-    else:
-        cz = MoveTo(xl - 40, 250).Rectangle(500 - (xl - 40), 20).Face()
-    cstrip = MoveTo(0, 0).Rectangle(250, cs).Face()
-    rest = outer - band - cz - cstrip
-    band.faces.name = "band"
-    band.faces.maxh = float(p["h_band"])
-    cz.faces.name = "contact_zone"
-    cz.faces.maxh = float(p["h_contact"])
-    cstrip.faces.name = "clamp_strip"
-    rest.faces.name = "panel"
-    cstrip.edges.Min(Y).name = "clamp"
-    if _segment(p):
-        shape = Glue([band, cz, cstrip, rest])
-        for e in shape.edges:
-            c = e.center
-            if abs(c.y - 250) < 1e-9 and xl < c.x < 500:
-                e.name = "load"
-        return ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=float(p["h_far"])))
-    yb = 250 - gap - R
-    half = Circle(Pnt(xl, yb), R).Face() * MoveTo(xl - R - 1, yb).Rectangle(2 * R + 2, R + 1).Face()
-    half.faces.name = "indenter"
-    half.faces.maxh = float(p["h_void"])
-    half.edges.Min(Y).name = "load"
-    void = MoveTo(xl - R - margin, yb).Rectangle(500 - (xl - R - margin), 250 - yb).Face() - half
-    void.faces.name = "void"
-    void.faces.maxh = float(p["h_void"])
-    shape = Glue([band, cz, cstrip, rest, half, void])
-    return ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=float(p["h_far"])))
 
 
 def build_scene(p: dict) -> ngtmc.Scene:
@@ -709,7 +523,9 @@ EXPECTED = {
         "xfail": "quick: reload peak measured 23.6 kN against the paper's 7.6 kN (+211 %); medium 20.8 kN "
                  "(+174 %): their first loading stops before the peak, so this is the uncracked panel's peak; "
                  "at the paper's resolution, where the crack runs before the turning point as in the paper, "
-                 "8.83 kN at 6.640 mm (+16.2 %, path following, 2026-12-03; see the study)"},
+                 "8.83 kN at 6.640 mm (+16.2 %, path following, 2026-12-03; see the study); not the paper's "
+                 "single-pass scheme: at quick with the turning point past the peak it reloads to 10.16 kN "
+                 "against path following's 9.86 kN (+3 %)"},
     "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
                          "source": "measured, quick (regression guard; the turning point, 6.3 mm)"},
     "reload_peak_force": {"case": "main", "quantity": "reload_peak_force", "value": 23621.0, "unit": "N", "rel": 0.05,
