@@ -204,6 +204,9 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
         #: displacement solves so accepted
         self.floor_rtol = FLOOR_RTOL
         self.floor_accepts = 0
+        #: line searches of the displacement Newton whose energy could not resolve the step
+        #: (round-off, ngtmc.displacement_newton.NOISE_FRACTION), so that its residual decided
+        self.energy_noise_switches = 0
 
     # ================================================================= mesh-dependent data
     def _apply_orders(self):
