@@ -153,6 +153,16 @@ MEASURED = {
                                   "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2169,
                                   "reload_peak_force": 8439, "reload_peak_load": 6.6217,
                                   "final_force": 7975, "final_wf": 8790.9}},
+    "medium_path_following_paper_schedule_2026_12_03": {
+        "note": "ngtmc run l-panel -r medium --set load_cases=cyclic --set scheme=path-following --no-report "
+                "--no-vtk (the paper's schedule 0 -> 6.3 -> 6 -> 7 mm; the crack runs before the turning point, "
+                "as at the paper's resolution), one thread beside a two-thread 3D run for most of its time",
+        "elements": 27986, "ndof_u": 28204, "ndof_alpha": 14102,
+        "steps": 247, "newton_iterations": 1057, "cutbacks": 8, "wall_time_s": 3449,
+        "first_loading_peak_force": 16843, "first_loading_peak_load": 6.2736,
+        "force_at_turning_point": 6944, "wf_at_turning_point": 3258.7, "dissipated_at_turning_point": 1629.3,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2665, "reload_peak_force": 8679,
+        "reload_peak_load": 6.4924, "final_force": 7977, "final_wf": 8840.0},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,

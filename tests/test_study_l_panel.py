@@ -180,9 +180,9 @@ def test_l0_sweep_record():
 def test_reload_peak_record():
     """The recorded reload peaks of a cracked panel (MEASURED, the study docstring's table and the
     report's second figure): the paper's single-pass scheme lets the damage grow while unloading,
-    yet reloads higher than path following, so it does not explain the paper's lower 7.6 kN; the
-    finer mesh lowers the reload peak (quick to medium); at the paper's resolution the reload peak
-    lies 16.2 % above 7.6 kN."""
+    yet reloads higher than path following, so it does not explain the paper's lower 7.6 kN; nor
+    does the mesh: with the paper's schedule medium and the paper's resolution agree; at the
+    paper's resolution the reload peak lies 16.2 % above 7.6 kN."""
     turn = S.MEASURED["quick_turn_past_the_peak_2026_12_03"]
     pf, sp = turn["path_following"], turn["single_pass"]
     assert pf["unload_wf_growth"] == 0.0 and sp["unload_wf_growth"] > 0.4 * sp["wf_at_turning_point"]
@@ -192,14 +192,22 @@ def test_reload_peak_record():
     fig = S.figures(study_parameters(S, "quick")[1])[1]
     ys = [s["y"][0] for s in fig["series"] if s["kind"] == "points"]
     med = turn["path_following_medium"]
-    assert ys == [pf["reload_peak_force"], sp["reload_peak_force"], med["reload_peak_force"], paper["reload_peak_force"]]
-    # the finer mesh lowers the reload peak by about the square root of the toughness factors
+    med6 = S.MEASURED["medium_path_following_paper_schedule_2026_12_03"]
+    assert ys == [pf["reload_peak_force"], sp["reload_peak_force"], med["reload_peak_force"],
+                  med6["reload_peak_force"], paper["reload_peak_force"]]
+    # turning point 6.6 mm: quick is too coarse, the reload peak falls to medium by about the square
+    # root of the toughness factors
     factor = [1 + h / (2 * S.PARAMETERS["l0"][0]) for h in (2.0, 1.0)]
     assert pf["reload_peak_force"] / med["reload_peak_force"] == pytest.approx((factor[0] / factor[1]) ** 0.5, rel=0.05)
-    # and the first-loading peak without the damage lag: medium within 2 % of Ambati's 16 kN
-    assert med["first_loading_peak_force"] == pytest.approx(16000.0, rel=0.02)
-    assert max(s["y"][0] for s in S.figures(study_parameters(S, "quick")[1])[0]["series"]
-               if s["kind"] == "points" and "path following" in s["label"]) == med["first_loading_peak_force"]
+    # the paper's turning point 6.3 mm: medium and the paper's resolution agree within 2 %, both
+    # more than 14 % above 7.6 kN (the mesh does not explain the paper's value)
+    assert med6["reload_peak_force"] == pytest.approx(paper["reload_peak_force"], rel=0.02)
+    assert min(med6["reload_peak_force"], paper["reload_peak_force"]) > 1.14 * 7600.0
+    # the first-loading peak without the damage lag at medium: 2-6 % above Ambati's 16 kN
+    l0_fig = S.figures(study_parameters(S, "quick")[1])[0]
+    (pf_medium,) = [s["y"] for s in l0_fig["series"] if "path following" in s["label"]]
+    assert pf_medium == [med["first_loading_peak_force"], med6["first_loading_peak_force"]]
+    assert all(0.0 < f / 16000.0 - 1.0 < 0.06 for f in pf_medium)
 
 
 # the published reload peak (strict xfail, with the measured values) and the measured quick values
