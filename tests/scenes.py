@@ -28,10 +28,12 @@ def tension_bar(E=1000.0, nu=0.3, Gc=1e-3, l0=1.0, maxh=0.1, fracture=True, **kw
                        fracture_regions="bar" if fracture else (), **kw)
 
 
-def two_blocks(gap=0.05, gamma0=1e-5, maxh=0.05, void_maxh=0.02, kbar_r=1e-6):
-    """Two 1 x 0.4 blocks separated by a void layer of thickness ``gap``; the lower block is
-    clamped at the bottom, the upper one pushed down on its top edge."""
-    W, hb = 1.0, 0.4
+def two_blocks(gap=0.05, gamma0=1e-5, maxh=0.05, void_maxh=0.02, kbar_r=1e-6, width=1.0, height=0.4,
+               E=1000.0, nu=0.3, **kw):
+    """Two ``width`` x ``height`` blocks separated by a void layer of thickness ``gap``; the lower
+    block is clamped at the bottom, the upper one pushed down on its top edge. ``kbar_r=None``: no
+    regulariser; ``kw``: further Scene fields (for example ``thickness``, ``order``)."""
+    W, hb = width, height
     low = Rectangle(W, hb).Face()
     low.faces.name = "lower"
     void = MoveTo(0, hb).Rectangle(W, gap).Face()
@@ -43,11 +45,12 @@ def two_blocks(gap=0.05, gamma0=1e-5, maxh=0.05, void_maxh=0.02, kbar_r=1e-6):
     shape.edges.Min(Y).name = "bottom"
     shape.edges.Max(Y).name = "top"
     mesh = ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
-    return ngtmc.Scene(mesh, {".*": ngtmc.Material(1000.0, 0.3)},
+    return ngtmc.Scene(mesh, {".*": ngtmc.Material(E, nu)},
                        supports=[ngtmc.Support("bottom", x=True, y=True)],
                        load=ngtmc.DisplacementLoad("top", "-y", hold_tangential=True),
                        density={"void": 0.0}, gamma0=gamma0,
-                       regulariser=ngtmc.Regulariser("void", length=1.0, kbar_r=kbar_r))
+                       regulariser=None if kbar_r is None else ngtmc.Regulariser("void", length=1.0, kbar_r=kbar_r),
+                       **kw)
 
 
 def _slit_plate(maxh, h_band, l0, notch, direction, **kw):

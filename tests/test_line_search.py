@@ -11,28 +11,15 @@ from __future__ import annotations
 
 import ngsolve as ngs
 import pytest
-from netgen.occ import Glue, MoveTo, OCCGeometry, Rectangle, Y
 
 import ngtmc
 import ngtmc.displacement_newton as dn
+from scenes import two_blocks
 
 
 def _squeezed_void_scene(maxh=2.0):
-    W, hb, gap = 100.0, 40.0, 6.0
-    low = Rectangle(W, hb).Face()
-    low.faces.name = "lower"
-    void = MoveTo(0, hb).Rectangle(W, gap).Face()
-    void.faces.name = "void"
-    up = MoveTo(0, hb + gap).Rectangle(W, hb).Face()
-    up.faces.name = "upper"
-    shape = Glue([low, void, up])
-    shape.edges.Min(Y).name = "bottom"
-    shape.edges.Max(Y).name = "top"
-    mesh = ngs.Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
-    return ngtmc.Scene(mesh, {".*": ngtmc.Material(25800.0, 0.18)},
-                       supports=[ngtmc.Support("bottom", x=True, y=True)],
-                       load=ngtmc.DisplacementLoad("top", "-y", hold_tangential=True), density={"void": 0.0},
-                       gamma0=1e-6, regulariser=None, order=1, thickness=100.0)
+    return two_blocks(gap=6.0, gamma0=1e-6, maxh=maxh, void_maxh=maxh, kbar_r=None, width=100.0, height=40.0,
+                      E=25800.0, nu=0.18, order=1, thickness=100.0)
 
 
 def test_round_off_of_the_energy_does_not_cost_iterations():
