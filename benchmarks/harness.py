@@ -276,14 +276,10 @@ def run_variant(label: str, build_scene, schedule, control, options: dict, *, du
            "setup_scene_s": t1 - t0, "setup_solver_s": t2 - t1, "wall_time_s": wall, "cpu_time_s": cpu,
            "ndof": jsonable(nd), "elements": int(sim.solver.mesh.ne)}
     rec.update(summarise(history))
-    c = getattr(sim, "coupled", None)
-    if c is not None:
-        gm = list(getattr(c, "gmres_iterations", []) or [])
-        rec["coupled"] = {"floor_accepts": int(getattr(c, "floor_accepts", 0)),
-                          "floor_worst_relative_residual": float(getattr(c, "floor_worst", 0.0)),
-                          "levenberg_steps": int(getattr(c, "levenberg_steps", 0)), "relaxations": int(getattr(c, "relaxations", 0)),
-                          "gmres_solves": len(gm), "gmres_iterations_mean": float(np.mean(gm)) if gm else None,
-                          "dissipation_steps": int(getattr(getattr(sim, "_path", None), "dissipation_steps", 0))}
+    counters = sim.counters()
+    rec["counters"] = {k: v for k, v in counters.items() if k != "coupled"}
+    if "coupled" in counters:
+        rec["coupled"] = counters["coupled"]
     timings = dict(getattr(sim.solver, "timings", None) or {})
     timings = {k: float(v) - float(timings0.get(k, 0.0)) for k, v in timings.items()}
     rec["timings_s"] = timings

@@ -410,6 +410,27 @@ class Simulation(StepSchemes):
                 cb(self, row)
         return SimulationResult(self.history, self.units, self.solver, self._elapsed())
 
+    def counters(self) -> dict:
+        """The solver's safeguard counters since this process built it (a resumed run counts from
+        the resume): displacement solves accepted at the residual floor (``floor_accepts``), line
+        searches decided by the residual because the energy's round-off hid the step
+        (``energy_noise_switches``) and, for the monolithic schemes, the coupled Newton's floor
+        accepts and its worst relative residual there (-), Levenberg steps, relaxations, GMRES
+        solves and their mean iterations, and path following's dissipation steps. Counts, no unit."""
+        s = self.solver
+        out = {"floor_accepts": int(getattr(s, "floor_accepts", 0)),
+               "energy_noise_switches": int(getattr(s, "energy_noise_switches", 0))}
+        c = self.coupled
+        if c is not None:
+            gm = list(getattr(c, "gmres_iterations", []) or [])
+            out["coupled"] = {"floor_accepts": int(c.floor_accepts),
+                              "floor_worst_relative_residual": float(c.floor_worst),
+                              "levenberg_steps": int(c.levenberg_steps), "relaxations": int(c.relaxations),
+                              "gmres_solves": len(gm),
+                              "gmres_iterations_mean": float(np.mean(gm)) if gm else None,
+                              "dissipation_steps": int(getattr(self._path, "dissipation_steps", 0) or 0)}
+        return out
+
     @property
     def units(self) -> dict:
         """History column -> unit for this scene (:func:`ngtmc.runfiles.history_units`), forces in

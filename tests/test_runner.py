@@ -112,6 +112,10 @@ def test_run_folder_contents(full_run):
     res = meta["results"]["main"]
     for key in ("peak_force", "peak_load", "steps", "newton_iterations", "wall_time_s", "solve_time_s"):
         assert key in res, key
+    # the solver's safeguard counters (Simulation.counters): non-negative integer counts
+    assert set(res["counters"]) >= {"floor_accepts", "energy_noise_switches"}
+    assert all(isinstance(res["counters"][k], int) and res["counters"][k] >= 0
+               for k in ("floor_accepts", "energy_noise_switches"))
     h = pd.read_csv(full_run / "history.csv")
     assert list(h.columns[:len(HISTORY_COLUMNS)]) == HISTORY_COLUMNS
     assert h["step"].tolist() == list(range(len(h)))

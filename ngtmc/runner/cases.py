@@ -243,6 +243,7 @@ class _Run(RunFolder):
             # where the time went (s) since this process started the case (see ngtmc.solver.TIMING_KEYS)
             res["time_split_s"] = {k: float(v) for k, v in sim.solver.timings.items()}
             res["peak_memory_mb"] = peak_memory_mb()
+            res["counters"] = sim.counters()
             if sim.refinements:   # adaptive refinement: the mesh the case ended on
                 cm["mesh_final"] = {k_: v for k_, v in _mesh_info(sim.solver).items() if k_ != "displacement_order"}
                 cm["refinements"] = len(sim.refinements)
