@@ -34,7 +34,7 @@ import numpy as np
 import ngsolve as ngs
 
 from .materials import deformation_gradient
-from .coupled_linear import LINEAR_SOLVERS, CoupledLinearSolver
+from .coupled_linear import FACTOR_REUSE, LINEAR_SOLVERS, CoupledLinearSolver
 from .dissipation import Dissipation
 from .discretisation import bilinear_form, rules
 from .energy_forms import _QuadraticPlus, merged_terms
@@ -119,16 +119,23 @@ class CoupledNewton:
     the step). Convergence: the displacement residual below ``NewtonOptions.rtol`` (None, the
     default: COUPLED_RTOL) times the reaction scale plus its atol, and the phase-field
     complementarity residual below ``alpha_tol`` (None, the default: the same as that rtol) times
-    the residual of a uniform unit alpha (dimensionless); ``max_iterations``: per attempt."""
+    the residual of a uniform unit alpha (dimensionless); ``max_iterations``: per attempt;
+    ``linear_solver``, ``gmres_rtol``, ``gmres_maxsteps``, ``factor_reuse``: of the linear solves
+    (:class:`~ngtmc.coupled_linear.CoupledLinearSolver`)."""
 
     def __init__(self, solver, alpha_tol: float | None = None, max_iterations: int = 15, linear_solver: str = "block-gmres",
-                 gmres_rtol: float = 1e-8, gmres_maxsteps: int = 100, weak_stop: bool = WEAK_STOP):
+                 gmres_rtol: float = 1e-8, gmres_maxsteps: int = 100, weak_stop: bool = WEAK_STOP,
+                 factor_reuse: bool = FACTOR_REUSE):
         if solver.alpha is None:
             raise ValueError("CoupledNewton needs a scene with fracture regions (no phase field to couple)")
         if solver._tractions:
             raise ValueError("the monolithic scheme does not handle Traction loads (force control); use "
                              "scheme='single-pass' or 'staggered', or a displacement load")
         CoupledLinearSolver.check(linear_solver, gmres_rtol)  # before the (costly) form
+        if not (isinstance(factor_reuse, bool) or factor_reuse == "auto"):
+            raise ValueError(f"coupled factor_reuse = {factor_reuse!r} must be True, False or 'auto' (3D meshes only)")
+        #: keep block-GMRES's u-u factor while it pays (:data:`ngtmc.coupled_linear.FACTOR_REUSE`)
+        self.factor_reuse = solver.mesh.dim == 3 if factor_reuse == "auto" else factor_reuse
         #: solves accepted at the residual floor (the solver's ``floor_rtol``, shared with the
         #: displacement Newton; None: never, as in the adjoint's recordings), and their largest
         #: relative residual
@@ -184,7 +191,8 @@ class CoupledNewton:
         self._free_base = np.array(list(self.X.FreeDofs()), dtype=bool)
         self._free_base[:self.nu] = s._free_np  # vertex conditions live in the solver's mask
         #: factorizations of the assembled tangent (:mod:`ngtmc.coupled_linear`)
-        self.lin = CoupledLinearSolver(self.form, self.nu, self.linear_solver, *self._gmres, ranks=s.ranks)
+        self.lin = CoupledLinearSolver(self.form, self.nu, self.linear_solver, *self._gmres, ranks=s.ranks,
+                                       factor_reuse=self.factor_reuse)
         self._r = self.x.vec.CreateVector()
         self._rc = self.x.vec.CreateVector()  # MPI: a residual with its ranks' parts summed
         self._dx = self.x.vec.CreateVector()

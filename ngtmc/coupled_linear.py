@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import time
 
 import numpy as np
 import ngsolve as ngs
@@ -38,11 +39,28 @@ LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
 #: residual larger than the right-hand side (the MPI test scene's stall, docs/performance.md).
 GMRES_TRUE_RTOL = 1e-4
 
+#: Reuse of the u-u factor of block-GMRES across Newton directions ("rent or buy"): GMRES always
+#: solves the current tangent, so an older factor is only a poorer preconditioner. With reuse on,
+#: a direction keeps the factor if the GMRES time spent with it beyond the iterations of its first
+#: solve (those extra iterations times the measured time per iteration), plus what the next
+#: direction is expected to add, stays below the measured time of its factorization. The next
+#: direction is expected to add what the last reused one did, or, for the first reuse of a
+#: factor, what the first reuse of the factors before it did (learned during the run: where one
+#: reuse already costs more than a factorization, as in 2D, factors are not reused). A Levenberg
+#: (shifted) direction always makes a new factor, and a solve that fails with an older factor is
+#: repeated with a new one before UMFPACK. The choice is per run: ``coupled={"factor_reuse": ...}``
+#: (True, False or "auto"). "auto", the default, reuses on 3D meshes only, as measured
+#: (docs/performance.md, "Reusing the u-u factor while it pays"): in 3D a factorization costs
+#: 35 to 68 triangular solves (medium and paper hemisphere), in 2D a reused factor's extra GMRES
+#: iterations cost more than the factorization they save.
+FACTOR_REUSE = "auto"
+
 
 class CoupledLinearSolver:
     """Factorizations of the assembled coupled tangent ``form.mat`` (u dofs first, ``nu`` of
     them). ``linear_solver``: one of LINEAR_SOLVERS; ``gmres_rtol``, ``gmres_maxsteps``: of
-    block-GMRES. :attr:`gmres_iterations` lists the GMRES iterations of each solve."""
+    block-GMRES; ``factor_reuse``: keep block-GMRES's u-u factor while it pays
+    (:data:`FACTOR_REUSE`; :class:`~ngtmc.coupled.CoupledNewton` resolves its "auto"). :attr:`gmres_iterations` lists the GMRES iterations of each solve."""
 
     @staticmethod
     def check(linear_solver: str, gmres_rtol: float):
@@ -54,8 +72,10 @@ class CoupledLinearSolver:
             raise ValueError(f"gmres_rtol = {gmres_rtol!r} must be in (0, 1)")
 
     def __init__(self, form, nu: int, linear_solver: str = "block-gmres", gmres_rtol: float = 1e-8,
-                 gmres_maxsteps: int = 100, ranks=None):
+                 gmres_maxsteps: int = 100, ranks=None, factor_reuse: bool = False):
         self.check(linear_solver, gmres_rtol)
+        if not isinstance(factor_reuse, bool):
+            raise ValueError(f"factor_reuse = {factor_reuse!r} must be True or False")
         self.form = form
         #: reductions over MPI ranks (:class:`ngtmc.distributed.Ranks`; None or serial: one process)
         self.ranks = ranks
@@ -65,10 +85,23 @@ class CoupledLinearSolver:
         self.gmres_rtol = float(gmres_rtol)
         self.gmres_maxsteps = int(gmres_maxsteps)
         self.gmres_iterations: list[int] = []
-        #: block-GMRES solves whose true residual failed GMRES_TRUE_RTOL (then solved by UMFPACK)
+        #: block-GMRES solves solved by UMFPACK instead: their true residual failed GMRES_TRUE_RTOL,
+        #: or GMRES did not converge in ``gmres_maxsteps`` (with a new u-u factor, when reused)
         self.inexact_solves = 0
         self._inv_u = None
         self._diag = None  # (positions in the matrix values, rows) of the diagonal entries
+        #: keep the u-u factor while it pays (FACTOR_REUSE); counts of the factors made and reused
+        self.factor_reuse = factor_reuse
+        self.u_factorizations = 0
+        self.u_factor_reuses = 0
+        self._u_stale = True     # the stored factor is of a shifted matrix, or none was made yet
+        self._u_cost = 0.0       # s, the last u-u factorization
+        self._u_extra = 0.0      # s of GMRES beyond the first solve's iterations since that factorization
+        self._u_base = None      # GMRES iterations of the first solve with that factor
+        self._u_last = 0.0       # s of extra GMRES of the last direction that reused it
+        self._u_first = 0.0      # s of extra GMRES of the first reuse of a factor (learned)
+        self._u_pending = None   # (extra before it, first reuse?) of the direction in progress, if reused
+        self._u_count = 0        # directions that reused the current factor
 
     def _diagonal(self):
         """Positions of the diagonal entries in the values of ``form.mat`` and their rows (from
@@ -158,7 +191,9 @@ class CoupledLinearSolver:
         corrections of a nearly converged step inexact, see tests/test_traps.py). Falls back to
         UMFPACK when GMRES does not converge in ``gmres_maxsteps``, or when its solution's true
         residual exceeds GMRES_TRUE_RTOL of the right-hand side (counted in
-        :attr:`inexact_solves`).
+        :attr:`inexact_solves`). With :attr:`factor_reuse` the u-u factor of an earlier matrix may
+        precondition (:data:`FACTOR_REUSE`); a solve that fails with it is repeated with a new one
+        before UMFPACK.
 
         ``diagonal_shift`` (per dof, Levenberg): the matrix's values hold the shifted diagonal
         while the factors are made (:meth:`shifted`); the solves apply the restored matrix plus
@@ -166,12 +201,22 @@ class CoupledLinearSolver:
         from ngsolve.krylovspace import GMResSolver
         A = self.form.mat
         nu = self.nu
-        if self._inv_u is None:
-            fu = free.copy()
-            fu[nu:] = False
-            self._inv_u = A.Inverse(ngs.BitArray(fu.tolist()), inverse="sparsecholesky")
+        shifted = diagonal_shift is not None
+        if self._u_pending is not None:   # the last direction reused the factor: what it cost
+            before, first = self._u_pending
+            self._u_last = self._u_extra - before
+            if first:
+                self._u_first = self._u_last
+            self._u_pending = None
+        reuses = self._u_count > 0          # the factor was reused already: the last reuse's price is the estimate
+        expected = self._u_last if reuses else self._u_first
+        reused = not (shifted or self._u_stale or not self.factor_reuse or self._u_extra + expected >= self._u_cost)
+        if reused:
+            self.u_factor_reuses += 1
+            self._u_pending = (self._u_extra, not reuses)
+            self._u_count += 1
         else:
-            self._inv_u.Update()
+            self._new_u_factor(free, shifted)
         fa = free.copy()
         fa[:nu] = False
         inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
@@ -185,27 +230,63 @@ class CoupledLinearSolver:
             with self._diagonal_added(diagonal_shift) if diagonal_shift is not None else contextlib.nullcontext():
                 return A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
 
+        def gmres(rhs):
+            """GMRES on the current factors: (solution, whether it failed)."""
+            t0 = time.perf_counter()
+            gm = GMResSolver(mat=op, pre=pre, tol=self.gmres_rtol, atol=1e-300, maxiter=self.gmres_maxsteps,
+                             printrates=False)
+            sol = gm.Solve(rhs=rhs)
+            its = gm.iterations
+            self.gmres_iterations.append(its)
+            if self._u_base is None:
+                self._u_base = its
+            elif its > self._u_base:   # the older factor's price: its extra iterations
+                self._u_extra += (its - self._u_base) * (time.perf_counter() - t0) / its
+            bad = its >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy()))
+            if not bad:
+                check.data = op * sol
+                check.data -= rhs
+                bad = check.Norm() > GMRES_TRUE_RTOL * rhs.Norm()
+            return sol, bad
+
         def solve(rhs, out):
             rhsN = rhs.FV().NumPy()
             rhsN[~free] = 0.0
             if direct:
                 out.data = direct[0] * rhs
                 return
-            gm = GMResSolver(mat=op, pre=pre, tol=self.gmres_rtol, atol=1e-300, maxiter=self.gmres_maxsteps,
-                             printrates=False)
-            sol = gm.Solve(rhs=rhs)
-            self.gmres_iterations.append(gm.iterations)
-            bad = gm.iterations >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy()))
-            if not bad:
-                check.data = op * sol
-                check.data -= rhs
-                bad = check.Norm() > GMRES_TRUE_RTOL * rhs.Norm()
-                self.inexact_solves += int(bad)
+            sol, bad = gmres(rhs)
+            if bad and reused[0]:      # an older factor: try again with a new one
+                self._u_first = max(self._u_first, self._u_cost)   # reusing did not pay
+                self._u_pending = None
+                self._new_u_factor(free, shifted)
+                reused[0] = False
+                sol, bad = gmres(rhs)
             if bad:
+                self.inexact_solves += 1
                 direct.append(direct_inverse())
                 sol.data = direct[0] * rhs
             out.data = sol
+        reused = [reused]
         return solve
+
+    def _new_u_factor(self, free: np.ndarray, shifted: bool):
+        """A new sparse Cholesky factor of the u-u block of the matrix's current values (its
+        symbolic step made once); its time is the price :data:`FACTOR_REUSE` weighs."""
+        A = self.form.mat
+        t0 = time.perf_counter()
+        if self._inv_u is None:
+            fu = free.copy()
+            fu[self.nu:] = False
+            self._inv_u = A.Inverse(ngs.BitArray(fu.tolist()), inverse="sparsecholesky")
+        else:
+            self._inv_u.Update()
+        self._u_cost = time.perf_counter() - t0
+        self._u_extra = 0.0
+        self._u_base = None
+        self._u_count = 0
+        self._u_stale = shifted
+        self.u_factorizations += 1
 
 
 def _applying(inv):

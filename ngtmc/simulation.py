@@ -416,7 +416,9 @@ class Simulation(StepSchemes):
         searches decided by the residual because the energy's round-off hid the step
         (``energy_noise_switches``) and, for the monolithic schemes, the coupled Newton's floor
         accepts and its worst relative residual there (-), Levenberg steps, relaxations, GMRES
-        solves and their mean iterations, and path following's dissipation steps. Counts, no unit."""
+        solves and their mean iterations, block-GMRES's u-u factors made and reused
+        (:data:`ngtmc.coupled_linear.FACTOR_REUSE`), and path following's dissipation steps.
+        Counts, no unit."""
         s = self.solver
         out = {"floor_accepts": int(getattr(s, "floor_accepts", 0)),
                "energy_noise_switches": int(getattr(s, "energy_noise_switches", 0))}
@@ -428,6 +430,8 @@ class Simulation(StepSchemes):
                               "levenberg_steps": int(c.levenberg_steps), "relaxations": int(c.relaxations),
                               "gmres_solves": len(gm),
                               "gmres_iterations_mean": float(np.mean(gm)) if gm else None,
+                              "u_factorizations": int(c.lin.u_factorizations),
+                              "u_factor_reuses": int(c.lin.u_factor_reuses),
                               "dissipation_steps": int(getattr(self._path, "dissipation_steps", 0) or 0)}
         return out
 

@@ -245,6 +245,75 @@ def test_block_gmres_solution_failing_its_true_residual_is_solved_by_umfpack(mon
     assert loose.inexact_solves == 1 and np.linalg.norm(x.FV().NumPy()[free] - b) <= 1e-12 * np.linalg.norm(b)
 
 
+def test_block_gmres_reuses_its_u_factor_while_it_pays_and_solves_the_current_matrix(monkeypatch):
+    """FACTOR_REUSE: with an older u-u factor GMRES still solves the current matrix (to UMFPACK's
+    solution); a new factor is made once the extra GMRES time reaches the factorization's, for a
+    shifted (Levenberg) direction and after it, and for a solve that failed with the older one."""
+    import ngtmc.coupled_linear as cl
+    s, c = _damaged_state(seed=5)
+    free = c._free_base.copy()
+    free[:c.nu] &= ~s._dir_np
+    rhs = c.x.vec.CreateVector()
+    rhs.FV().NumPy()[:] = np.random.default_rng(11).standard_normal(rhs.size)
+    rhs.FV().NumPy()[~free] = 0.0
+    x, x_um = rhs.CreateVector(), rhs.CreateVector()
+
+    def umfpack():
+        cl.CoupledLinearSolver(c.form, c.nu, "umfpack").factorize(free)(rhs, x_um)
+        return x_um.FV().NumPy()[free].copy()
+
+    def error():
+        b = umfpack()
+        return np.linalg.norm(x.FV().NumPy()[free] - b) / np.linalg.norm(b)
+
+    gm = cl.CoupledLinearSolver(c.form, c.nu, "block-gmres", gmres_rtol=1e-10, factor_reuse=True)
+    c.form.AssembleLinearization(c.x.vec)
+    gm.factorize(free)(rhs, x)
+    assert (gm.u_factorizations, gm.u_factor_reuses) == (1, 0) and error() <= 1e-7
+    fresh_iterations = gm.gmres_iterations[-1]
+    # another state, another tangent: the old factor preconditions, the solution is the new matrix's
+    s.u.vec.FV().NumPy()[:] *= 1.3
+    s.alpha.vec.FV().NumPy()[:] = np.minimum(1.2 * s.alpha.vec.FV().NumPy(), 0.9)
+    c._gather()
+    c.form.AssembleLinearization(c.x.vec)
+    gm._u_cost = 1e9                   # a factorization that never pays: keep the factor
+    gm.factorize(free)(rhs, x)
+    assert (gm.u_factorizations, gm.u_factor_reuses) == (1, 1) and error() <= 1e-7
+    assert gm.gmres_iterations[-1] > fresh_iterations   # the older factor is a poorer preconditioner
+    # once the extra GMRES time reaches the factorization's, the next direction makes a new factor
+    gm._u_cost, gm._u_extra = 1e-3, 1e-3
+    gm.factorize(free)(rhs, x)
+    assert (gm.u_factorizations, gm.u_factor_reuses) == (2, 1) and error() <= 1e-7
+    # a shifted direction makes a new factor, and so does the direction after it
+    gm._u_cost = 1e9
+    y = rhs.CreateVector()
+    gm.shifted(free, 0.1)(rhs, y)
+    gm.factorize(free)(rhs, x)
+    assert (gm.u_factorizations, gm.u_factor_reuses) == (4, 1) and error() <= 1e-7
+    # a solve that fails with an older factor is repeated with a new one, then by UMFPACK
+    gm.factorize(free)(rhs, x)
+    assert (gm.u_factorizations, gm.u_factor_reuses) == (4, 2)
+    monkeypatch.setattr(cl, "GMRES_TRUE_RTOL", 0.0)
+    gm.factorize(free)(rhs, x)
+    assert (gm.u_factorizations, gm.u_factor_reuses, gm.inexact_solves) == (5, 3, 1) and error() <= 1e-12
+    # where the first reuse of a factor cost more GMRES time than a factorization (learned), the
+    # factors that follow are not reused
+    monkeypatch.setattr(cl, "GMRES_TRUE_RTOL", 1e-4)
+    gm._u_first = gm._u_cost + 1.0
+    made = gm.u_factorizations
+    for _ in range(3):
+        gm.factorize(free)(rhs, x)
+    assert gm.u_factorizations == made + 3 and error() <= 1e-7
+    # off (the default): a new factor for every direction
+    off = cl.CoupledLinearSolver(c.form, c.nu, "block-gmres")
+    off.factorize(free)(rhs, x)
+    off.factorize(free)(rhs, x)
+    assert (off.u_factorizations, off.u_factor_reuses) == (2, 0)
+    assert c.factor_reuse is False        # FACTOR_REUSE "auto": off for 2D meshes
+    with pytest.raises(ValueError, match="factor_reuse"):
+        CoupledNewton(s, factor_reuse="yes")
+
+
 def test_coupled_tangent_is_the_derivative_of_the_residual_in_3d_with_a_squeezed_void():
     """The same finite-difference check on a 3D scene (two blocks extruded into prisms, both
     fracture regions, a void between them squeezed to J of about 0.04, order 2 there with the
@@ -272,6 +341,7 @@ def test_coupled_tangent_is_the_derivative_of_the_residual_in_3d_with_a_squeezed
     s.H_committed = plus * rng.choice([0.5, 2.0], size=plus.size)
     s.H.vec.FV().NumPy()[:] = s.H_committed
     c = CoupledNewton(s)
+    assert c.factor_reuse is True     # FACTOR_REUSE 'auto': on for 3D meshes
     c._gather()
     _, Kv, fd = _tangent_and_difference(c, rng, 1e-6)
     K = Kv.FV().NumPy()
