@@ -96,8 +96,11 @@ quarter model resolves better (docs/three-d.md).
 Medium, quarter (31272 tetrahedra, 47139 u dofs, two threads; 2026-12-03): peak 6.0325 N at
 0.0700 mm (-2.7 % against quick), the whole curve to 0.1 mm in 65 steps, 495 Newton iterations, 4
 cut-backs and 2221 s (37 min; beside a one-thread job for its first 18 minutes), 1692 MB at its
-peak (docs/three-d.md). Paper (60049 tetrahedra, 103485 u dofs; 2026-12-03, one thread): 34 steps to
-0.068 mm in 3852 s, 2356 MB at its peak, stopped before the peak (docs/three-d.md).
+peak (docs/three-d.md). Paper (60049 tetrahedra, 103485 u dofs; 2026-12-03 and 2026-12-04, two
+threads, mostly beside other jobs, resumed once): peak **5.9325 N at 0.0700 mm** (-1.7 % against
+medium, -4.3 % against quick), after 35 steps and 144 Newton iterations in 2565 s; stopped in the
+crack run at 0.0669 mm and 3.88 N after 41 steps, 238 iterations and 4757 s, 2504 MB at its peak
+(docs/three-d.md). The rest of the crack run is not measured.
 
 The run's peak memory is in ``metadata.json`` (``results.<case>.peak_memory_mb``) and the
 report.
@@ -211,6 +214,12 @@ MEASURED: dict = {
                                   "threads": 2, "wall_time_s": 2221, "cpu_time_s": 3267, "peak_memory_mb": 1692,
                                   "note": "whole curve to 0.1 mm, 2026-12-03 (CEILING_REPEAT); beside a one-thread "
                                           "job for its first 18 minutes (docs/three-d.md)"},
+    "paper_hemisphere_quarter": {"n_elements": 60049, "ndof_u": 103485, "ndof_alpha": 12201, "peak_force": 5.932502,
+                                 "peak_load": 0.0700, "steps": 41, "newton_iterations": 238, "cutbacks": 2,
+                                 "threads": 2, "wall_time_s": 4757, "cpu_time_s": 7193, "peak_memory_mb": 2504,
+                                 "note": "peak after 35 steps, 144 iterations, 2565 s; stopped (SIGTERM) in the crack "
+                                         "run at 0.0669 mm and 3.88 N; 2026-12-03/04, mostly beside other jobs, "
+                                         "resumed once; u-u factors reused from step 36 (docs/three-d.md)"},
     "quick_hemisphere_half": {"n_elements": 22098, "ndof_u": 36369, "ndof_alpha": 4603, "peak_force": 12.911,
                          "peak_load": 0.07314, "steps": 70, "newton_iterations": 518, "cutbacks": 2,
                          "cpu_time_s": 3013, "wall_time_s": 3422, "peak_memory_mb": 662,
