@@ -60,7 +60,8 @@ class CoupledLinearSolver:
     """Factorizations of the assembled coupled tangent ``form.mat`` (u dofs first, ``nu`` of
     them). ``linear_solver``: one of LINEAR_SOLVERS; ``gmres_rtol``, ``gmres_maxsteps``: of
     block-GMRES; ``factor_reuse``: keep block-GMRES's u-u factor while it pays
-    (:data:`FACTOR_REUSE`; :class:`~ngtmc.coupled.CoupledNewton` resolves its "auto"). :attr:`gmres_iterations` lists the GMRES iterations of each solve."""
+    (:data:`FACTOR_REUSE`; :class:`~ngtmc.coupled.CoupledNewton` resolves its "auto").
+    :attr:`gmres_iterations` lists the GMRES iterations of each solve."""
 
     @staticmethod
     def check(linear_solver: str, gmres_rtol: float):
