@@ -251,24 +251,24 @@ class CoupledLinearSolver:
             return sol, bad
 
         def solve(rhs, out):
+            nonlocal reused
             rhsN = rhs.FV().NumPy()
             rhsN[~free] = 0.0
             if direct:
                 out.data = direct[0] * rhs
                 return
             sol, bad = gmres(rhs)
-            if bad and reused[0]:      # an older factor: try again with a new one
+            if bad and reused:         # an older factor: try again with a new one
                 self._u_first = max(self._u_first, self._u_cost)   # reusing did not pay
                 self._u_pending = None
                 self._new_u_factor(free, shifted)
-                reused[0] = False
+                reused = False
                 sol, bad = gmres(rhs)
             if bad:
                 self.inexact_solves += 1
                 direct.append(direct_inverse())
                 sol.data = direct[0] * rhs
             out.data = sol
-        reused = [reused]
         return solve
 
     def _new_u_factor(self, free: np.ndarray, shifted: bool):
