@@ -6,14 +6,17 @@
 * :func:`hemisphere_mesh`: a notched beam indented by a hemisphere, half of it across the width
   (symmetry plane z = 0), tetrahedra curved to order 2. Regions ``beam``, ``band`` (the refined
   slab above the notch), ``support_zone``, ``load_zone`` (a block of the beam top under the
-  hemisphere, ``sphere_load_zone`` wide and deep, where fracture is not modelled), ``void``,
-  ``indenter``; boundaries ``sym`` (z = 0),
+  hemisphere, ``sphere_load_zone`` wide and deep, where fracture is not modelled), ``void`` (the
+  void within ``sphere_regularised_radius`` of the hemisphere's axis, the part it squeezes),
+  ``void_far`` (the rest of the void block, if any), ``indenter``; boundaries ``sym`` (z = 0),
   ``support_left``, ``support_right`` (strips of the bottom face across the width) and ``load``
   (the hemisphere's flat top).
 
 The file name starts with an underscore: it is a helper, not a study.
 """
 from __future__ import annotations
+
+import math
 
 
 def slab_meshes(p2: dict, thickness: float):
@@ -33,12 +36,15 @@ def check_hemisphere(p: dict):
     bw, zs, sl = float(p["sphere_band_half_width"]), float(p["sphere_support_zone"]), float(p["sphere_support_length"])
     if not (0 < nd < H and 0 < R < min(W / 2, float(p["sphere_void_half_width"])) and sl <= zs < L / 2 - bw
             and float(p["sphere_notch_width"]) / 2 < bw and float(p["sphere_gap"]) > 0
-            and 0 <= float(p["sphere_load_zone"]) < min(H - nd, W / 2, L / 2 - zs)):
+            and 0 <= float(p["sphere_load_zone"]) < min(H - nd, W / 2, L / 2 - zs)
+            and float(p["sphere_regularised_radius"]) > math.sqrt(2) * float(p["sphere_contact_box"])):
         raise ValueError("three_point_bending_3d hemisphere: need 0 < sphere_notch_depth < sphere_beam_height, "
                          "0 < sphere_radius < sphere_beam_width/2 and < sphere_void_half_width, "
                          "sphere_support_length <= sphere_support_zone < sphere_beam_length/2 - sphere_band_half_width, "
                          "sphere_notch_width/2 < sphere_band_half_width, sphere_gap > 0, "
-                         "0 <= sphere_load_zone < sphere_beam_height - sphere_notch_depth")
+                         "0 <= sphere_load_zone < sphere_beam_height - sphere_notch_depth, "
+                         "sphere_regularised_radius > sqrt(2) sphere_contact_box (the contact patch's block "
+                         "lies within it)")
 
 
 def hemisphere_mesh(p: dict):
@@ -47,7 +53,7 @@ def hemisphere_mesh(p: dict):
     side ``sphere_contact_box`` under the hemisphere's lowest point), ``sphere_h_indenter``,
     ``sphere_h_beam``)."""
     import ngsolve as ngs
-    from netgen.occ import Box, Glue, OCCGeometry, Pnt, Sphere, Y
+    from netgen.occ import Box, Cylinder, Glue, OCCGeometry, Pnt, Sphere, Y
 
     check_hemisphere(p)
     L, H = float(p["sphere_beam_length"]), float(p["sphere_beam_height"])
@@ -81,10 +87,15 @@ def hemisphere_mesh(p: dict):
         parts += [(zone_l - sq_l, "support_zone", h_beam / 2), (zone_r - sq_r, "support_zone", h_beam / 2)]
     if under is not None:
         parts.append((under, "load_zone", float(p["sphere_h_band"])))
-    if near is not None:   # the contact patch: finer void under the hemisphere's lowest point
-        parts += [(void - near, "void", float(p["sphere_h_void"])), (void * near, "void", float(p["sphere_h_contact"]))]
+    outer = void - near if near is not None else void
+    rr = float(p["sphere_regularised_radius"])
+    if rr * rr < vw * vw + W * W:   # the cylinder leaves part of the block out: that part is 'void_far'
+        cyl = Cylinder(Pnt(xm, H - 1, 0), Y, r=rr, h=yc - H + 2)
+        parts += [(outer * cyl, "void", float(p["sphere_h_void"])), (outer - cyl, "void_far", float(p["sphere_h_void"]))]
     else:
-        parts.append((void, "void", float(p["sphere_h_void"])))
+        parts.append((outer, "void", float(p["sphere_h_void"])))
+    if near is not None:   # the contact patch: finer void under the hemisphere's lowest point
+        parts.append((void * near, "void", float(p["sphere_h_contact"])))
     if quarter:   # the mid-span half too: x <= L/2 (symmetry plane x = L/2)
         keep = Box(Pnt(-1, -1, -1), Pnt(xm, yc + 1, W + 1))
         parts = [(s * keep, name, h) for s, name, h in parts if s.center.x < xm + 1e-9]

@@ -3,7 +3,9 @@
 Two ways of loading the same notched beam (parameter ``loading``):
 
 * ``"indenter"`` (the paper's): a solid half-disc above mid-span, across a gap filled with a
-  third-medium void. Regions ``beam``, ``band``, ``support_zone``, ``void``, ``indenter``;
+  third-medium void. Regions ``beam``, ``band``, ``support_zone``, ``void`` (within
+  ``regularised_half_width`` of the indenter's axis), ``void_far`` (the rest of the void
+  rectangle, if any), ``indenter``;
   boundaries ``support_left``, ``support_right`` and ``load`` (the indenter's flat top).
 * ``"window"`` (Ambati et al. 2015's own set-up): no indenter, no void; the boundary ``load`` is
   a window of width ``window_width`` centred on the top edge at mid-span. Regions ``beam``,
@@ -53,6 +55,9 @@ def check_geometry(p: dict):
     if p.get("loading", "indenter") == "indenter":
         if not float(p["indenter_radius"]) < float(p["void_half_width"]):
             raise ValueError("three_point_bending geometry: need indenter_radius < void_half_width")
+        if not float(p["regularised_half_width"]) > 0:
+            raise ValueError("three_point_bending geometry: need regularised_half_width > 0; got "
+                             f"{float(p['regularised_half_width']):g} mm")
     else:
         ww = float(p["window_width"])
         if not (0 < ww and ww / 2 < bw):
@@ -117,11 +122,18 @@ def build_mesh(p: dict):
         yc = Hb + gap + R
         half = Circle((xm, yc), R).Face() * MoveTo(xm - R, yc - R).Rectangle(2 * R, R).Face()
         void = MoveTo(xm - vw, Hb).Rectangle(2 * vw, gap + R).Face() - half
-        void.faces.name = "void"
+        rw = float(p["regularised_half_width"])
+        voids = [void]
+        if rw < vw:   # beyond rw of the axis the void is never squeezed: 'void_far' (order 1, no regulariser)
+            near = MoveTo(xm - rw, Hb).Rectangle(2 * rw, gap + R).Face()
+            voids = [void * near, void - near]
+            voids[1].faces.name = "void_far"
+        voids[0].faces.name = "void"
         half.faces.name = "indenter"
-        void.faces.maxh = float(p["h_void"])
+        for v in voids:
+            v.faces.maxh = float(p["h_void"])
         half.faces.maxh = float(p["h_indenter"])
-        parts += [void, half]
+        parts += [*voids, half]
         y_load = yc
     else:
         y_load = Hb

@@ -9,7 +9,9 @@ at every resolution are in the study module's docstring.
 from __future__ import annotations
 
 import json
+import math
 
+import ngsolve as ngs
 import numpy as np
 import pandas as pd
 import pytest
@@ -58,7 +60,13 @@ def test_scene_geometry():
     with pytest.warns(ngtmc.ResolutionWarning):
         scene = case.build_scene().check()
     mesh = scene.mesh
-    assert set(mesh.GetMaterials()) == {"beam", "band", "support_zone", "void", "indenter"}
+    assert set(mesh.GetMaterials()) == {"beam", "band", "support_zone", "void", "void_far", "indenter"}
+    # the regularised void: within regularised_half_width = 0.5 of the axis, the rectangle under the
+    # indenter minus the half-disc; the rest of the 2 x 0.55 rectangle is void_far (area by hand;
+    # the half-disc's arc curved to order 2)
+    area = {r: ngs.Integrate(1, mesh, definedon=mesh.Materials(r)) for r in ("void", "void_far")}
+    assert area["void"] == pytest.approx(1.0 * 0.55 - math.pi * 0.5**2 / 2, rel=1e-4)
+    assert area["void_far"] == pytest.approx(2 * 0.5 * 0.55, rel=1e-9)
     assert {"support_left", "support_right", "load"} <= set(mesh.GetBoundaries())
     pts = np.asarray(mesh.ngmesh.Coordinates())
     assert pts[:, 0].min() == pytest.approx(0.0) and pts[:, 0].max() == pytest.approx(8.0)
