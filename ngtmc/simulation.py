@@ -24,10 +24,12 @@ import numpy as np
 import pandas as pd
 
 from .path import N_S as PATH_N_S
-from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, history_units, peak, peak_index
+from .runfiles import HISTORY_UNITS as _HISTORY_UNITS, peak, peak_index
 from .scene import Scene
 from .schemes import PATH_STEPS, SCHEMES, StepSchemes
 from .solver import NewtonOptions, Solver
+from .simulation_records import RunRecords
+from .simulation_state import RunState
 from .stepping import AdaptiveStepControl, ControlState, Schedule
 
 __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "PATH_STEPS", "simulate", "check_stop_after_drop"]
@@ -89,7 +91,7 @@ def check_stop_after_drop(value, schedule: Schedule | None = None):
                          "drop the force and stop the run")
 
 
-class Simulation(StepSchemes):
+class Simulation(RunRecords, RunState, StepSchemes):
     """Load-stepping run of a scene (see the module docstring).
 
     Parameters
@@ -203,52 +205,6 @@ class Simulation(StepSchemes):
         self._progress = Progress(progress if scene.mesh.comm.rank == 0 else False, "[ngtmc]", self.force_unit)
         self._record(step_size=0.0, newton_iterations=0, staggered_iterations=0, cutbacks=0,
                      solve_time=0.0, assembly_time=0.0, projected=0)
-
-    # ------------------------------------------------------------------ bookkeeping
-    def _elapsed(self) -> float:
-        if self._t_start is None:
-            return self._elapsed_before
-        return self._elapsed_before + time.perf_counter() - self._t_start
-
-    def _record(self, **info):
-        s = self.solver
-        t0 = time.perf_counter()
-        en = s.energies()
-        forces = s.reactions(reuse_residual=self.step > 0)
-        row = {
-            "step": self.step,
-            "load": s.load,
-            "force": forces[self.scene.force_load.label],
-            "fracture_energy": en["fracture_energy"],
-            "dissipated_energy": en["dissipated_energy"],
-            "elastic_energy": en["elastic_energy"],
-            "regularisation_energy": en["regularisation_energy"],
-            "max_alpha": s.max_alpha(),
-            "min_J": s.min_J(),
-            "newton_iterations": info["newton_iterations"],
-            "staggered_iterations": info["staggered_iterations"],
-            "cutbacks": info["cutbacks"],
-            "alpha_projected": info["projected"],
-            "step_size": info["step_size"],
-            "wall_time": self._elapsed(),
-            "solve_time": info["solve_time"],
-            "assembly_time": info["assembly_time"],
-        }
-        if self.adapt is not None:
-            row["dofs"] = s.fes_u.ndof + (s.fes_a.ndof if s.fes_a is not None else 0)
-            row["elements"] = s.mesh.ne
-        if len(forces) > 1:
-            row.update({f"force_{n}": f for n, f in forces.items()})
-        row.update({f"displacement_{n}": v for n, v in s.load_displacements().items()})
-        self.rows.append(row)
-        s.timings["record"] += time.perf_counter() - t0
-        return row
-
-    @property
-    def history(self) -> pd.DataFrame:
-        """Accepted steps so far as a DataFrame (units in :attr:`units`: :data:`HISTORY_UNITS` and the
-        columns of the scene's loads, see :func:`ngtmc.runfiles.history_units`)."""
-        return pd.DataFrame(self.rows, columns=list(self.units))
 
     @property
     def finished(self) -> bool:
@@ -379,10 +335,6 @@ class Simulation(StepSchemes):
                 f"(displacement {u[-1]:.6g} mm); the force-displacement curve has a limit point here. Use a "
                 f"displacement load (DisplacementLoad or DisplacementField) to follow the curve past it.")
 
-    def _report_progress(self, row):
-        if self.progress:
-            self._progress.step(self, row)
-
     # ------------------------------------------------------------------ whole run
     def steps(self) -> Iterator[dict]:
         """Advance to the end of the schedule, yielding the history row of each accepted step (a
@@ -410,112 +362,6 @@ class Simulation(StepSchemes):
                 cb(self, row)
         return SimulationResult(self.history, self.units, self.solver, self._elapsed())
 
-    def counters(self) -> dict:
-        """The solver's safeguard counters since this process built it (a resumed run counts from
-        the resume): displacement solves accepted at the residual floor (``floor_accepts``), line
-        searches decided by the residual because the energy's round-off hid the step
-        (``energy_noise_switches``) and, for the monolithic schemes, the coupled Newton's floor
-        accepts and its worst relative residual there (-), Levenberg steps, relaxations, GMRES
-        solves and their mean iterations, block-GMRES's u-u factors made and reused
-        (:data:`ngtmc.coupled_linear.FACTOR_REUSE`), and path following's dissipation steps.
-        Counts, no unit."""
-        s = self.solver
-        out = {"floor_accepts": int(getattr(s, "floor_accepts", 0)),
-               "energy_noise_switches": int(getattr(s, "energy_noise_switches", 0))}
-        c = self.coupled
-        if c is not None:
-            gm = list(getattr(c, "gmres_iterations", []) or [])
-            out["coupled"] = {"floor_accepts": int(c.floor_accepts),
-                              "floor_worst_relative_residual": float(c.floor_worst),
-                              "levenberg_steps": int(c.levenberg_steps), "relaxations": int(c.relaxations),
-                              "gmres_solves": len(gm),
-                              "gmres_iterations_mean": float(np.mean(gm)) if gm else None,
-                              "u_factorizations": int(c.lin.u_factorizations),
-                              "u_factor_reuses": int(c.lin.u_factor_reuses),
-                              "dissipation_steps": int(getattr(self._path, "dissipation_steps", 0) or 0)}
-        return out
-
-    @property
-    def units(self) -> dict:
-        """History column -> unit for this scene (:func:`ngtmc.runfiles.history_units`), forces in
-        this scene's unit (:attr:`force_unit`: ``"N/mm"`` in 2D with thickness 1 mm, else ``"N"``),
-        as in a run folder's metadata."""
-        units = history_units({ld.label: type(ld).__name__ for ld in self.scene.loads})
-        if self.adapt is not None:
-            units.update(dofs="-", elements="-")
-        return {k: (self.force_unit if (k == "force" or k.startswith("force_")) else v) for k, v in units.items()}
-
-    # ------------------------------------------------------------------ checkpoints
-    def get_state(self) -> dict:
-        """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows,
-        and with path following its rule's state (``path``, scalars) and predictor (``arrays``)."""
-        st = {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
-              "control": self.control_state.as_dict(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
-              "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows]}
-        arrays = {}
-        if self._path is not None:
-            st["path"] = self._path.get_state()
-            arrays.update(self._path.get_arrays())
-        if self.refinements:  # the mesh of the state: the initial one refined as recorded (adapt.replay)
-            st["refinements"] = [{"step": step, **rec.as_dict()} for step, rec in self.refinements]
-            arrays["refined_elements"] = np.concatenate([rec.elements for _, rec in self.refinements])
-        if arrays:
-            st["arrays"] = arrays
-        return st
-
-    def set_state(self, st: dict):
-        """Resume from a state of :meth:`get_state`. The state of a run whose mesh was refined
-        (``refinements``) is set on this simulation's mesh refined in the same way
-        (:func:`ngtmc.adapt.replay`), which must then be the run's initial mesh or a mesh of the
-        same run refined fewer times."""
-        self._replay_refinements(st)
-        self.solver.set_state(st["solver"])
-        self.t = float(st["t"])
-        self.step = int(st["step"])
-        self.control_state = ControlState.from_dict(st["control"])
-        self.last_delta_wf = float(st["last_delta_wf"])
-        self._wf_prev = float(st["wf_prev"])
-        self._elapsed_before = float(st["elapsed"])
-        self._t_start = None
-        self.rows = [dict(r) for r in st["rows"]]
-        if self._path is not None:
-            if "path" in st:
-                self._path.set_state(st["path"], st.get("arrays", {}))
-            else:  # a state of a run without path following: start the rule from this state
-                self._path.set_state({"rate": 0.0, "d_prev": self.coupled.D.value(), "dissipation_steps": 0})
-
-    def _replay_refinements(self, st: dict):
-        """Bring the mesh to the one of state ``st``: refine it by the refinements that ``st``
-        records beyond those this simulation has done (:func:`ngtmc.adapt.replay`)."""
-        recorded = list(st.get("refinements") or [])
-        if len(recorded) == len(self.refinements):
-            return
-        if self.adapt is None:
-            raise ValueError(f"this state is on a mesh refined {len(recorded)} times during its run; resume it with "
-                             "the run's adapt= (an ngtmc.Adaptivity)")
-        if len(recorded) < len(self.refinements):
-            raise ValueError(f"this state is on a mesh refined {len(recorded)} times, this simulation's mesh has been "
-                             f"refined {len(self.refinements)} times: a mesh is not coarsened; set the state on a new "
-                             "Simulation of the same scene")
-        from .adapt import RefinementRecord, replay
-        flat = np.asarray((st.get("arrays") or {}).get("refined_elements", np.zeros(0)), dtype=np.int64)
-        counts = [int(r["marked"]) for r in recorded]
-        if flat.size != sum(counts):
-            raise ValueError(f"the state records {sum(counts)} refined elements in {len(recorded)} refinements but "
-                             f"holds {flat.size}: it is damaged")
-        marks = np.split(flat, np.cumsum(counts)[:-1])
-        new = range(len(self.refinements), len(recorded))
-        replay(self.solver, [marks[k] for k in new])
-        if self.coupled is not None:
-            self.coupled.mesh_changed()
-        for k in new:
-            r = recorded[k]
-            self.refinements.append((int(r["step"]), RefinementRecord.from_dict(r, marks[k])))
-        last = recorded[-1]
-        if self.solver.mesh.ne != int(last["elements_after"]) or self.solver.fes_u.ndof != int(last["dofs_after"]):
-            raise ValueError(f"replaying the recorded refinements gave {self.solver.mesh.ne} elements and "
-                             f"{self.solver.fes_u.ndof} displacement dofs, the run had {last['elements_after']} and "
-                             f"{last['dofs_after']}: the state does not belong to this scene")
 
 
 def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
