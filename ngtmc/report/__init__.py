@@ -34,11 +34,13 @@ from .numbers import (  # noqa: F401
     key_number_rows, reference_peaks, _published_peak, speed_error_rows, TIME_SPLIT_PARTS,
     time_split_rows, _run_speed_entries)
 from .figures import (  # noqa: F401
-    MAX_FRAMES, MAX_VERTEX_FRAMES, MAX_EDGE_TRIANGLES, MAX_POINTS, N_LEVELS, CASE_COLORS, REF_COLORS,
+    MAX_POINTS, CASE_COLORS, REF_COLORS,
     ALPHA_COLORSCALE, RHO_COLORSCALE, FONT, _case_style, _axis, _layout, decimate, _legend_rows,
     _legend_below, _log_axis, _line, _log_toggle, _fig_force, _fig_step_size, _fig_wf_alpha, _fig_newton,
-    _fig_energies, _fig_interpolation, _nice_scale, deformation_scale, _frame_indices, mesh_payload,
-    _same_mesh, _level_colors, _fig_speed_error)
+    _fig_energies, _fig_interpolation, _fig_speed_error)
+from .mesh_frames import (  # noqa: F401
+    MAX_FRAMES, MAX_VERTEX_FRAMES, MAX_EDGE_TRIANGLES, N_LEVELS, _nice_scale, deformation_scale, _frame_indices,
+    mesh_payload, _same_mesh, _level_colors)
 from .page import (  # noqa: F401
     _env, _script_json, _json_default, _clean, _plotly_js, _status_banner, _parameter_rows, _mesh_rows,
     render_report)

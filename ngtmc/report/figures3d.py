@@ -12,7 +12,8 @@ import math
 
 import numpy as np
 
-from .figures import ALPHA_COLORSCALE, MAX_FRAMES, _font, _frame_indices, _title, deformation_scale
+from .figures import ALPHA_COLORSCALE, _font, _title
+from .mesh_frames import MAX_FRAMES, _frame_indices, deformation_scale
 from .numbers import fmt
 
 
@@ -133,7 +134,7 @@ def fig_surface(snap: dict, label: str, frames: list[int]) -> tuple[dict, dict] 
     """Deformed surface of the solid of a 3D entry of ``snapshots.npz``, coloured by alpha.
 
     A plotly ``mesh3d`` of the surface triangles (``triangles``), vertices displaced by
-    ``scale * u`` (mm; ``scale`` from :func:`.figures.deformation_scale`), colour = alpha at the
+    ``scale * u`` (mm; ``scale`` from :func:`.mesh_frames.deformation_scale`), colour = alpha at the
     vertices on a fixed scale 0..1, with one slider step per snapshot in ``frames`` labelled with
     its applied displacement (mm); the last one is drawn first. Coordinates are rounded to 1e-4
     of the domain size, alpha to 1e-3. Aspect mode "data": lengths are not distorted.
