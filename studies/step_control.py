@@ -92,8 +92,6 @@ steps. Most of the k_u = 1000 steps are spent in the crack tail after the peak.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ngtmc.study import SOLVER_PARAMETERS
 from ngtmc.studies import three_point_bending as tpb
 
