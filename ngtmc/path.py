@@ -33,6 +33,11 @@ applied: it bounds the dissipation per step, which the path now does itself):
    solve that asked for a large load change into a displacement step turned legitimate snaps,
    where cut-backs of dD converge, into displacement steps, and the notched plate's 2D and 3D
    twins then broke along different paths (tests/test_extrude.py).
+   With ``prescale`` (off by default), after a dissipation step, where the secant predictor
+   (rule 6, linear in dD) already moves the load by more than du_max, dD is scaled so before the
+   first solve (the growth factor shrinks with it): in the post-failure tail of the quick 3D
+   hemisphere, where the load moves about 2.3 du_max per base dD, every step was otherwise
+   solved twice.
    On a step's last attempt, a displacement step taken instead of a dissipation step ends, where
    its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``,
    default converged staggered passes at that load; such steps carry ``staggered_iterations``
@@ -100,11 +105,19 @@ class DissipationPath:
         Gc crack_advance crack_front (N mm). Default: the thinnest side of the bounding box of the
         fracture regions (the slab's thickness for an extruded slab, so a plane-strain slab takes
         the steps of its 2D twin times its thickness; tests/test_extrude.py).
+    growth_ceiling : bool or "auto"
+        Whether cut-backs cap the growth of dD (:mod:`ngtmc.path_sizing`).
+    prescale : bool
+        Rule 3 before the solve as well as after it (module docstring). Off by default: it
+        paid in the quick 3D hemisphere's tail and not in the quick 2D three-point bending
+        (docs/performance.md).
     """
 
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
-                 growth_ceiling: bool | str = "auto"):
+                 growth_ceiling: bool | str = "auto", prescale: bool = False):
         self.sim = sim
+        #: rule 3 before the solve (module docstring)
+        self.prescale = bool(prescale)
         self.coupled = c = sim.coupled
         s = sim.solver
         #: the fracture regions' mean l0, mm (default crack advance; the crack's resolution of
@@ -122,6 +135,11 @@ class DissipationPath:
         self.d_prev = c.D.value()
         #: accepted steps taken under dissipation control
         self.dissipation_steps = 0
+        #: dissipation attempts whose dD was scaled down before the solve (the secant predictor
+        #: moved the load past du_max), and those solved again with a smaller dD after a solve
+        #: whose load moved past du_max (rule 3)
+        self.prescaled_steps = 0
+        self.rescaled_steps = 0
         #: True after a dissipation step: the next step is one too, until the load of a
         #: dissipation step moves more than the step control's increment
         self.dissipating = False
@@ -183,6 +201,20 @@ class DissipationPath:
             self.rate = 0.0
             self.sizing.reset()
         self.segment = seg
+        prescaled = None
+        if self.prescale and self.dissipating and self.delta_d_prev > 0 and self.load_prev is not None:
+            # rule 3 before the solve, after a dissipation step: the secant through the last two
+            # states (linear in dD) moves the load past du_max, so the growth factor shrinks, in
+            # proportion, at once instead of after a converged solve, and grows again from there.
+            # Not after a displacement step: its rate overestimates the load change where the
+            # curve flattens at the peak. The growth factor must shrink with dD: scaling dD alone
+            # let it run ahead of the steps taken, and the quick 2D three-point bending then took
+            # one step of eight times the last dD at its peak
+            predicted = self.target / self.delta_d_prev * abs(self.load_n - self.load_prev)
+            if predicted > sim.control.du_max * (1 + 1e-9):
+                prescaled = 0.9 * sim.control.du_max / predicted
+                self.sizing.growth *= prescaled
+                self.prescaled_steps += 1
         dD = self.target
         self._factor_tried = self.factor
         if self._factor_first is None:
@@ -201,6 +233,7 @@ class DissipationPath:
         t0, t1 = self._segment()
         l_a, l_b = sch.load(t0), sch.load(t1)
         direction = 1.0 if l_b > l_a else -1.0
+        dD_small = None
         # the predictor's load: where the rate of the last step says dD is reached, at most du_max
         # (not the step control's du, which cut-backs shrink: from a state whose crack has
         # arrested, every alpha dof sits on its lower bound at a load increment of 1e-8 mm, the
@@ -222,14 +255,14 @@ class DissipationPath:
         keep = s.get_state()
         lo, hi = min(l_a, l_b), max(l_a, l_b)
         du_max = sim.control.du_max
-        slow = False
-        dD_small = None
+        slow = prescaled is not None and prescaled < 0.25
         r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
         sim._add(info, r)
         if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
             # the load moved more than a displacement step may: dissipate less, in proportion
             # (the same bound on the load change as a displacement step, at converged damage)
             dD_small = 0.9 * dD * du_max / abs(self.coupled.load_solved - load_n)
+            self.rescaled_steps += 1
             s.set_state(keep)
             r = self.coupled.solve(load_guess, dissipation=dD_small, load_bounds=(lo, hi))
             sim._add(info, r)
@@ -430,6 +463,7 @@ class DissipationPath:
         """The rule's scalars (JSON-able); its arrays are :meth:`get_arrays`."""
         return {**self.sizing.get_state(), "scale_ref": self._scale_ref, "segment": self.segment,
                 "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
+                "prescaled_steps": self.prescaled_steps, "rescaled_steps": self.rescaled_steps,
                 "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
                 "delta_d_prev": self.delta_d_prev}
 
@@ -460,6 +494,8 @@ class DissipationPath:
         self.rate = float(st["rate"])
         self.d_prev = float(st["d_prev"])
         self.dissipation_steps = int(st["dissipation_steps"])
+        self.prescaled_steps = int(st.get("prescaled_steps", 0))
+        self.rescaled_steps = int(st.get("rescaled_steps", 0))
         self.dissipating = bool(st.get("dissipating", False))
         self.sizing.set_state(st)
         self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))

@@ -73,6 +73,9 @@ class StepSchemes:
         if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
             raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
                              "(in 2D the dissipation is per mm of thickness)")
+        self.prescale = copt.pop("prescale", False)
+        if not isinstance(self.prescale, bool):
+            raise ValueError(f"coupled prescale = {self.prescale!r} must be True or False")
         path_du_max = copt.pop("du_max", None)
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
@@ -83,7 +86,8 @@ class StepSchemes:
         self._path = None
         if self.coupled is not None and self.path == "dissipation":
             from .path import DissipationPath
-            self._path = DissipationPath(self, self.crack_advance, self.crack_front, self.growth_ceiling)
+            self._path = DissipationPath(self, self.crack_advance, self.crack_front, self.growth_ceiling,
+                                         prescale=self.prescale)
             # a displacement step of the monolithic scheme carries no lag, so its size does not set
             # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
             # by the du_max of the lagged schemes' Eq. 20

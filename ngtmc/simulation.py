@@ -123,7 +123,10 @@ class Simulation(RunRecords, RunState, StepSchemes):
         growth of the next ones, :data:`ngtmc.path_sizing.GROWTH_CEILING_STEPS`; default "auto": a ceiling
         where the crack, the elements with alpha >= 0.5, is meshed no coarser than 1.5 l0
         (:data:`ngtmc.path_sizing.CEILING_MAX_H`),
-        :meth:`ngtmc.path_sizing.DissipationSizing.ceiling_applies`) and ``weak_stop`` (default True,
+        :meth:`ngtmc.path_sizing.DissipationSizing.ceiling_applies`), ``prescale`` (True: after a
+        dissipation step, a dissipation step whose secant predictor moves the load by more than
+        du_max is scaled down before it is solved, rule 3 of :mod:`ngtmc.path`; default False: only
+        after) and ``weak_stop`` (default True,
         :data:`ngtmc.coupled.WEAK_STOP`).
     newton : NewtonOptions, optional
     progress : bool or callable

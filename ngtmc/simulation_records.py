@@ -90,7 +90,9 @@ class RunRecords:
                               "gmres_iterations_mean": float(np.mean(gm)) if gm else None,
                               "u_factorizations": int(c.lin.u_factorizations),
                               "u_factor_reuses": int(c.lin.u_factor_reuses),
-                              "dissipation_steps": int(getattr(self._path, "dissipation_steps", 0) or 0)}
+                              "dissipation_steps": int(getattr(self._path, "dissipation_steps", 0) or 0),
+                              "dissipation_prescaled": int(getattr(self._path, "prescaled_steps", 0) or 0),
+                              "dissipation_resolved": int(getattr(self._path, "rescaled_steps", 0) or 0)}
         return out
 
     @property

@@ -358,7 +358,8 @@ def cases(p: dict) -> list[Case]:
                         scene=partial(build_hemisphere_scene, dict(p)), schedule=ngtmc.Schedule.monotonic(stop),
                         control=ngtmc.AdaptiveStepControl(du_max=du, k_u=float(p["k_u"]),
                                                           du_min=min(float(p["du_min"]), du)),
-                        options=dict(opts), snapshot_loads=[float(x) for x in np.linspace(0.0, stop, 7)[1:]],
+                        options={**opts, "coupled": {"prescale": True}},
+                        snapshot_loads=[float(x) for x in np.linspace(0.0, stop, 7)[1:]],
                         section=("x", float(p["sphere_beam_length"]) / 2), cost=4.0))
     return out
 

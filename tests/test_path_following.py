@@ -119,9 +119,41 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
     assert [step(4) for _ in range(4)] == [2.0, 4.0, 8.0, GROWTH_MAX]
 
 
+def test_a_dissipation_step_predicted_past_du_max_is_scaled_before_it_is_solved():
+    """Rule 3 of ngtmc.path before the solve (``prescale``, off by default): after a
+    dissipation step, where the secant through the last two states moves the load by more than
+    du_max, dD (and the growth factor) is scaled down at once. Both runs follow the same curve
+    (the peaks, sampled by different steps, within 0.5 %) and break the plate; no accepted
+    dissipation step moves the load by more than du_max in either run."""
+    runs = {}
+    for prescale in (True, False):
+        sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7),
+                               scheme="path-following", coupled={"prescale": prescale})
+        count = [0]
+        sim.run(callbacks=[lambda s, row: count.append(s._path.dissipation_steps)])
+        h = sim.history
+        runs[prescale] = (sim, h)
+        dl = np.abs(np.diff(h["load"].to_numpy()))
+        dissipation = np.diff(count) > 0   # the steps under dissipation control
+        assert len(dissipation) == len(dl) and dissipation.sum() >= 5
+        assert np.all(dl[dissipation] <= sim.control.du_max * (1 + 1e-9))
+    (on, h_on), (off, h_off) = runs[True], runs[False]
+    c_on, c_off = on.counters()["coupled"], off.counters()["coupled"]
+    print(f"\nprescaled: {c_on['dissipation_prescaled']} scaled before, {c_on['dissipation_resolved']} solved again, "
+          f"{int(h_on.newton_iterations.sum())} iterations, peak {h_on.force.max():.6g} N; only after: "
+          f"{c_off['dissipation_resolved']} solved again, {int(h_off.newton_iterations.sum())} iterations, "
+          f"peak {h_off.force.max():.6g} N")
+    assert c_on["dissipation_prescaled"] >= 1 and c_off["dissipation_prescaled"] == 0
+    assert c_off["dissipation_resolved"] >= 1
+    assert h_on.force.max() == pytest.approx(h_off.force.max(), rel=5e-3)
+    assert h_on.force.iloc[-1] < 0.01 * h_on.force.max() and h_off.force.iloc[-1] < 0.01 * h_off.force.max()
+
+
 def test_path_options_are_checked():
     with pytest.raises(ValueError, match="growth_ceiling"):
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"growth_ceiling": "no"})
+    with pytest.raises(ValueError, match="prescale"):
+        ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"prescale": "yes"})
     with pytest.raises(ValueError, match="weak_stop"):
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"weak_stop": 1})
     with pytest.raises(ValueError, match="path"):
