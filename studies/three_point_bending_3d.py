@@ -84,9 +84,12 @@ at 0.095113 mm, its 2D twin at 0.559748 N at 0.095171 mm: **+0.40 % and -0.06 %*
 steps, 494 and 411 Newton iterations), 1572 s of CPU against 308 s, 972 MB at its peak.
 
 (b) quick, quarter model, the void regularised within 0.25 mm of the axis (10767 tetrahedra,
-12675 u and 2428 alpha dofs; 2026-12-04): peak **6.1871 N (quarter) at 0.0700 mm**, 57 steps, 400
-Newton iterations, 3 cut-backs; **296 s for the case with two threads** (321 s for the command,
-set-up, compilation and report included), 307 MB at its peak. With the whole void regularised
+12675 u and 2428 alpha dofs; 2026-12-04, two threads, alone): peak **6.1871 N (quarter) at 0.0700
+mm**, 65 steps, 310 Newton iterations, 2 cut-backs; **245 s for the case, 255.5 s (4 min 16 s) for
+the command** (set-up, report and ParaView series included; compiled code cached), 311 MB at its
+peak. The case sizes its dissipation steps before their solve (``coupled={"prescale": True}``,
+:mod:`ngtmc.path`, rule 3): without it, the same day, 57 steps, 400 iterations, 307 s for the
+case and 317 s for the command, the same peak. With the whole void regularised
 (10896 tetrahedra, 19536 u dofs): 6.2013 N at 0.0700 mm, 64 steps, 345 iterations, 363 s on the
 same day (300 s on 2026-12-03), 510 MB. Until 2026-12-02 the crack run after the peak took 13 Newton iterations per step (59 steps,
 463 iterations, 400 s): dissipation steps of half the base failed in cycles, and a factor that
@@ -99,7 +102,8 @@ when the half model's mesh has a face at x = L/2 too (the crack on a mesh plane 
 across tetrahedra), so the two models differ by the discretisation of the crack, which the
 quarter model resolves better (docs/three-d.md).
 
-Medium, quarter (31179 tetrahedra, 32667 u dofs, two threads, alone; 2026-12-04): peak **6.0307 N
+Medium and paper, below, were run before the prescale option and not again with it. Medium, quarter (31179 tetrahedra, 32667 u dofs,
+two threads, alone; 2026-12-04): peak **6.0307 N
 at 0.0700 mm** (-2.5 % against quick), the whole curve to 0.1 mm in 75 steps, 519 Newton
 iterations, 3 cut-backs and **1130 s** (19 min), 1186 MB at its peak. With the whole void
 regularised (31272 tetrahedra, 47139 u dofs; 2026-12-03): 6.0325 N at 0.0700 mm, 65 steps, 495
@@ -221,20 +225,27 @@ MEASURED: dict = {
                    "wall_time_s": 911, "peak_memory_mb": 368, "peak_force_vs_2d": -0.000197,
                    "peak_load_vs_2d": 0.0000567},
     "quick_hemisphere_quarter": {"n_elements": 10767, "ndof_u": 12675, "ndof_alpha": 2428, "peak_force": 6.1871,
-                                 "peak_load": 0.0700, "steps": 57, "newton_iterations": 400, "cutbacks": 3,
-                                 "threads": 2, "wall_time_s": 296.4, "cpu_time_s": 588.1, "peak_memory_mb": 307,
-                                 "note": "void regularised within sphere_regularised_radius = 0.25 mm; alone, "
-                                         "2026-12-04; command 321 s (docs/three-d.md)"},
+                                 "peak_load": 0.0700, "steps": 65, "newton_iterations": 310, "cutbacks": 2,
+                                 "threads": 2, "wall_time_s": 245.4, "cpu_time_s": 487.7, "peak_memory_mb": 311,
+                                 "note": "void regularised within sphere_regularised_radius = 0.25 mm; dissipation "
+                                         "steps sized before their solve (coupled prescale); alone, 2026-12-04 "
+                                         "12:54; command 255.5 s (docs/three-d.md)"},
+    "quick_hemisphere_quarter_no_prescale": {"n_elements": 10767, "ndof_u": 12675, "ndof_alpha": 2428,
+                                 "peak_force": 6.1871, "peak_load": 0.0700, "steps": 57, "newton_iterations": 400,
+                                 "cutbacks": 3, "threads": 2, "wall_time_s": 306.6, "peak_memory_mb": 427,
+                                 "note": "the same before the prescale option, alone, 2026-12-04 11:41; command "
+                                         "317 s (296.4 s for the case at 08:27)"},
     "medium_hemisphere_quarter": {"n_elements": 31179, "ndof_u": 32667, "ndof_alpha": 6476, "peak_force": 6.0307,
                                   "peak_load": 0.0700, "steps": 75, "newton_iterations": 519, "cutbacks": 3,
                                   "threads": 2, "wall_time_s": 1130, "cpu_time_s": 2200, "peak_memory_mb": 1186,
                                   "note": "void regularised within 0.25 mm; whole curve to 0.1 mm, alone, 2026-12-04 "
-                                          "(docs/three-d.md)"},
+                                          "(before the prescale option; docs/three-d.md)"},
     "paper_hemisphere_quarter": {"n_elements": 59879, "ndof_u": 64710, "ndof_alpha": 12144, "peak_force": 5.9282,
                                  "peak_load": 0.0700, "steps": 79, "newton_iterations": 464, "cutbacks": 4,
                                  "threads": 2, "wall_time_s": 2794, "cpu_time_s": 5352, "peak_memory_mb": 1272,
-                                 "note": "void regularised within 0.25 mm; whole curve to 0.1 mm, alone, 2026-12-04; "
-                                         "peak after 35 steps, 211 iterations, 1019 s (docs/three-d.md)"},
+                                 "note": "void regularised within 0.25 mm; whole curve to 0.1 mm, alone, 2026-12-04 "
+                                         "(before the prescale option); peak after 35 steps, 211 iterations, 1019 s "
+                                         "(docs/three-d.md)"},
     "quick_hemisphere_quarter_whole_void": {"n_elements": 10896, "ndof_u": 19536, "ndof_alpha": 2450, "peak_force": 6.2013,
                                  "peak_load": 0.0700, "steps": 64, "newton_iterations": 345, "cutbacks": 3,
                                  "threads": 2, "wall_time_s": 300.2, "cpu_time_s": 580.6, "peak_memory_mb": 496,
