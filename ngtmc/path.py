@@ -89,6 +89,10 @@ N_S = 1
 #: hemisphere; docs/three-d.md).
 SECANT_DAMPING = (1.0, 0.5, 0.25)
 
+#: Rule 3: a dissipation step whose load moves (or is predicted to move) more than du_max is sized
+#: to move it by this fraction of du_max.
+BOUNDED_FRACTION = 0.9
+
 class DissipationPath:
     """Step rule of the path-following monolithic scheme (module docstring) for a
     :class:`ngtmc.simulation.Simulation`.
@@ -212,8 +216,8 @@ class DissipationPath:
             # one step of eight times the last dD at its peak
             predicted = self.target / self.delta_d_prev * abs(self.load_n - self.load_prev)
             if predicted > sim.control.du_max * (1 + 1e-9):
-                prescaled = 0.9 * sim.control.du_max / predicted
-                self.sizing.growth *= prescaled
+                prescaled = BOUNDED_FRACTION * sim.control.du_max / predicted
+                self.sizing.shrink(prescaled)
                 self.prescaled_steps += 1
         dD = self.target
         self._factor_tried = self.factor
@@ -233,7 +237,6 @@ class DissipationPath:
         t0, t1 = self._segment()
         l_a, l_b = sch.load(t0), sch.load(t1)
         direction = 1.0 if l_b > l_a else -1.0
-        dD_small = None
         # the predictor's load: where the rate of the last step says dD is reached, at most du_max
         # (not the step control's du, which cut-backs shrink: from a state whose crack has
         # arrested, every alpha dof sits on its lower bound at a load increment of 1e-8 mm, the
@@ -256,12 +259,13 @@ class DissipationPath:
         lo, hi = min(l_a, l_b), max(l_a, l_b)
         du_max = sim.control.du_max
         slow = prescaled is not None and prescaled < 0.25
+        dD_small = None
         r = self.coupled.solve(load_guess, dissipation=dD, load_bounds=(lo, hi))
         sim._add(info, r)
         if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
             # the load moved more than a displacement step may: dissipate less, in proportion
             # (the same bound on the load change as a displacement step, at converged damage)
-            dD_small = 0.9 * dD * du_max / abs(self.coupled.load_solved - load_n)
+            dD_small = BOUNDED_FRACTION * dD * du_max / abs(self.coupled.load_solved - load_n)
             self.rescaled_steps += 1
             s.set_state(keep)
             r = self.coupled.solve(load_guess, dissipation=dD_small, load_bounds=(lo, hi))

@@ -114,6 +114,12 @@ class DissipationSizing:
         self.failed_factor = None
         self.ceiling_held = False
 
+    def shrink(self, factor: float):
+        """Scale the growth factor by ``factor`` (< 1): a dissipation step sized down before its
+        solve (rule 3 of :mod:`ngtmc.path`), so that the next steps grow from the dD taken, not from
+        the one proposed."""
+        self.growth *= factor
+
     def ceiling_applies(self) -> bool:
         """Whether a cut-back sets a ceiling: ``option`` True or False, or with "auto"
         where the crack is meshed finely enough: the median longest edge of the elements that
