@@ -163,6 +163,15 @@ MEASURED = {
         "force_at_turning_point": 6944, "wf_at_turning_point": 3258.7, "dissipated_at_turning_point": 1629.3,
         "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2665, "reload_peak_force": 8679,
         "reload_peak_load": 6.4924, "final_force": 7977, "final_wf": 8840.0},
+    "medium_path_following_paper_schedule_spectral_2026_12_04": {
+        "note": "the same with --set split=spectral (Miehe's spectral split in the history, Ambati's), one thread, "
+                "alone for most of its time",
+        "elements": 27986, "ndof_u": 28204, "ndof_alpha": 14102,
+        "steps": 298, "newton_iterations": 1243, "cutbacks": 15, "wall_time_s": 1911,
+        "first_loading_peak_force": 16836, "first_loading_peak_load": 6.2731,
+        "force_at_turning_point": 6936, "wf_at_turning_point": 3276.1, "dissipated_at_turning_point": 1638.1,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2663, "reload_peak_force": 8679,
+        "reload_peak_load": 6.4911, "final_force": 8150, "final_wf": 8797.5},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
