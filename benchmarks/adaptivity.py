@@ -114,11 +114,15 @@ def main(kind: str, scene_name: str = "notched", scheme: str | None = None, **ad
     ctrl = ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=100.0, du_min=1e-7)
     t0 = time.perf_counter()
     sim = ngtmc.Simulation(scene, stop, ctrl, adapt=adapt, compile=True, scheme=scheme)
-    res = sim.run()
+    failure = None
+    try:
+        sim.run()
+    except ngtmc.StepFailure as e:   # report how far it came
+        failure = str(e)
     wall = time.perf_counter() - t0
-    h = res.history
+    h = sim.history
     i = int(np.argmax(h["force"].to_numpy()))
-    s = res.solver
+    s = sim.solver
     dofs = lambda: s.fes_u.ndof + s.fes_a.ndof
     out = {"scene": scene_name, "kind": kind, "scheme": scheme, "peak_force": float(h["force"].iloc[i]),
            "peak_load": float(h["load"].iloc[i]),
@@ -127,7 +131,8 @@ def main(kind: str, scene_name: str = "notched", scheme: str | None = None, **ad
            "elements_at_peak": int(h["elements"].iloc[i]) if "elements" in h else s.mesh.ne,
            "dofs_end": dofs(), "elements_end": s.mesh.ne, "wall_time_s": round(wall, 1),
            "final_force": float(h["force"].iloc[-1]),
-           "refinements": len(sim.refinements), "adapt": adapt_kw}
+           "refinements": len(sim.refinements), "adapt": adapt_kw,
+           "final_load": float(h["load"].iloc[-1]), "failed": failure}
     if scene_name == "notched":
         out["crack_y"] = crack_height(s)
     if kind in ("amr", "uniform"):

@@ -49,6 +49,9 @@ A run is resumed on its refined mesh by :func:`replay`: the elements marked in e
 are recorded (:class:`RefinementRecord`), and NGSolve's bisection of the same marks on the same
 initial mesh gives the same mesh and dof numbering again.
 
+``Adaptivity(remesh_maxh=...)`` refines by meshing the geometry again instead of bisecting
+(:mod:`ngtmc.remesh`, generated element shapes, the state carried across non-nested meshes).
+
 Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); the adjoint of
 :mod:`ngtmc.sensitivities` refuses a run whose mesh changed.
 
@@ -66,7 +69,7 @@ import ngsolve as ngs
 
 from .materials import check_number
 
-__all__ = ["Adaptivity", "mark", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
+__all__ = ["Adaptivity", "mark", "targets", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
 
 
 @dataclass(frozen=True)
@@ -90,6 +93,11 @@ class Adaptivity:
     nominal size (0.0157 mm; docs/adaptivity.md). sqrt(2) ends between 0.71 and 1.41 times the
     target, centred on it.
 
+    remesh_maxh: refine by generating a new mesh from the geometry (:mod:`ngtmc.remesh`) instead
+    of NGSolve's bisection: the global size, mm, the scene's mesh was generated with (None:
+    bisection). history_transfer: with remeshing, how H is carried to the new mesh, "max" (the
+    old element's largest value; never heals) or "linear" (the old element's linear fit).
+
     Defaults measured on the notched plate of benchmarks/adaptivity.py (docs/adaptivity.md):
     alpha 0.2 / H_c 1.0 gave the pre-refined band's peak to 0.4 % with 71 % of its dofs at the
     peak; alpha 0.1 / 0.75 H_c refined most of the plate before the peak (58k dofs against 4k).
@@ -104,6 +112,8 @@ class Adaptivity:
     max_rounds: int = 10
     buffer_length: float = 0.0
     size_tolerance: float = 1.0
+    remesh_maxh: float | None = None
+    history_transfer: str = "max"
 
     def __post_init__(self):
         check_number("Adaptivity h_crack", self.h_crack, "mm")
@@ -127,6 +137,14 @@ class Adaptivity:
         check_number("Adaptivity size_tolerance", self.size_tolerance, "-")
         if not (math.isfinite(self.size_tolerance) and self.size_tolerance >= 1.0):
             raise ValueError(f"Adaptivity size_tolerance = {self.size_tolerance!r} must be finite and >= 1")
+        if self.remesh_maxh is not None:
+            check_number("Adaptivity remesh_maxh", self.remesh_maxh, "mm")
+            if not (math.isfinite(self.remesh_maxh) and self.remesh_maxh > 0):
+                raise ValueError(f"Adaptivity remesh_maxh = {self.remesh_maxh!r} mm must be finite and > 0 (or None)")
+        from .remesh import HISTORY_TRANSFERS
+        if self.history_transfer not in HISTORY_TRANSFERS:
+            raise ValueError(f"Adaptivity history_transfer = {self.history_transfer!r} is not one of "
+                             f"{', '.join(map(repr, HISTORY_TRANSFERS))}")
         if int(self.max_rounds) != self.max_rounds or self.max_rounds < 1:
             raise ValueError(f"Adaptivity max_rounds = {self.max_rounds!r} must be an integer >= 1")
 
@@ -213,15 +231,29 @@ def _neighbours(mesh, flags: np.ndarray) -> np.ndarray:
     return hit[nodes].any(axis=1)
 
 
-def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None) -> np.ndarray:
+def targets(solver, adapt: Adaptivity) -> np.ndarray:
+    """Target size of every element, mm: ``h_crack`` in the fracture regions, ``h_void`` in the
+    rest of the void (with the J indicator), inf elsewhere (never refined)."""
+    frac, void = _element_regions(solver)
+    target = np.full(solver.mesh.ne, np.inf)
+    if solver.alpha is not None:
+        target[frac] = adapt.h_crack
+    if adapt.h_void is not None:
+        target[void & ~frac] = adapt.h_void
+    return target
+
+
+def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, covered: np.ndarray | None = None) -> np.ndarray:
     """Elements to refine (boolean array over the elements) for the solver's current state.
 
     H: history at the history points (MPa), default the committed one; pass the trial history
-    of a step not yet committed. See the module docstring for the indicators."""
+    of a step not yet committed. covered: elements already refined to their target by
+    remeshing (:meth:`ngtmc.remesh.Remesher.covered`), which count as fine whatever their size.
+    See the module docstring for the indicators."""
     mesh = solver.mesh
     ne = mesh.ne
     frac, void = _element_regions(solver)
-    target = np.full(ne, np.inf)
+    target = targets(solver, adapt)
     flags = np.zeros(ne, dtype=bool)
     if solver.alpha is not None:
         H = solver.H_committed if H is None else H
@@ -233,16 +265,16 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None) -> np.ndarray:
         al = _per_element(scratch.vec.FV().NumPy(), ne)
         crack = ((Hn >= adapt.history_fraction * Hc).any(axis=1) | (al > adapt.alpha_threshold).any(axis=1)) & frac
         flags |= crack
-        target[frac] = adapt.h_crack
     if adapt.h_void is not None and void.any():
         J = _per_element(solver.J_values(), ne)
         flags |= (J < adapt.J_threshold).any(axis=1) & void
-        target[void & ~frac] = adapt.h_void
     for _ in range(int(adapt.buffer)):
         if not flags.any():
             break
         flags = _neighbours(mesh, flags)
     coarse = solver.h > target * adapt.size_tolerance * (1.0 + 1e-9)
+    if covered is not None:
+        coarse &= ~covered
     if adapt.buffer_length > 0 and (flags & coarse).any():
         # hysteresis: only when the indicator reaches an element still to refine is the zone within
         # buffer_length refined too; the crack then runs about that far before the next refinement

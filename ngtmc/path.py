@@ -358,17 +358,19 @@ class DissipationPath:
             self.x_prev, self.load_prev = None, None
         self.d_prev = self.coupled.D.value(np.asarray(before["alpha_committed"], dtype=float))
 
-    def resolve(self, load: float, t_new: float):
+    def resolve(self, load: float, t_new: float, at_load: bool = False):
         """Solve the step just converged on the old mesh again on the refined one (predictor-
         corrector of :mod:`ngtmc.adapt`): the same kind of step, a dissipation step of the same dD
         (which may leave the load elsewhere) or a displacement step to the same ``load`` (mm),
         from the solver's current u and alpha (the transferred solution, with the boundary values
         of ``load``) and its committed state (the one before the step). ``t_new``: the pseudo-time
-        the old mesh's step reached. Returns (ok, info) as :meth:`attempt`."""
+        the old mesh's step reached. ``at_load``: solve at ``load`` whatever the kind of step (a
+        remeshed run, :mod:`ngtmc.remesh`: from a state carried across non-nested meshes a
+        dissipation step's load ran off). Returns (ok, info) as :meth:`attempt`."""
         sim, s = self.sim, self.sim.solver
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
                 "projected": 0}
-        if self._last_kind != "dissipation":
+        if at_load or self._last_kind != "dissipation":
             ok, info = sim._coupled_newton(load, info)
             if ok:
                 info["t_new"] = t_new

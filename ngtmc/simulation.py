@@ -185,10 +185,16 @@ class Simulation(RunRecords, RunState, StepSchemes):
         if stop_after_drop is not None:
             check_stop_after_drop(stop_after_drop, schedule)
         self.stop_after_drop = stop_after_drop
-        self.solver = Solver(scene, newton=newton, compile=compile, refine_to=None if adapt is None else adapt.h_crack)
+        self._solver_options = dict(newton=newton, compile=compile, refine_to=None if adapt is None else adapt.h_crack)
+        self.solver = Solver(scene, **self._solver_options)
+        #: the size restrictions of a run refined by remeshing (:class:`ngtmc.remesh.Remesher`)
+        self._remesher = None
         if adapt is not None:
             from .adapt import check_solver
             check_solver(self.solver)
+            if adapt.remesh_maxh is not None:
+                from .remesh import Remesher
+                self._remesher = Remesher(scene.mesh, adapt.remesh_maxh)
         #: refinements of the run (:class:`ngtmc.adapt.RefinementRecord`, with the step they followed)
         self.refinements: list = []
         self.control = control = self._init_scheme(scheme, staggered_tol, max_staggered, coupled, control)
@@ -250,6 +256,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
                 totals[k] += info[k]
             if ok and self.adapt is not None:
                 ok, info, saved = self._refine_and_resolve(t_new, info, saved, totals)
+                s = self.solver   # a remeshed run has a new solver
             if ok:
                 t_new = info.get("t_new", t_new)  # path following solves for the load
                 break
@@ -290,16 +297,23 @@ class Simulation(RunRecords, RunState, StepSchemes):
         info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
         cuts the step back as for any failed step."""
         from . import adapt as amr
-        s = self.solver
+        from .remesh import remesh_step
+        rm = self._remesher
         for _ in range(self.adapt.max_rounds):
-            marked = amr.mark(s, self.adapt, info.get("H_trial"))
+            s = self.solver
+            covered = rm.covered(s.mesh, amr.targets(s, self.adapt)) if rm is not None else None
+            marked = amr.mark(s, self.adapt, info.get("H_trial"), covered=covered)
             if not marked.any():
                 break
             previous = self._path.predictor_states() if self._path is not None else []
-            record, (saved, *previous) = amr.refine(s, marked, [saved, *previous])
+            if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
+                record, (saved, *previous) = remesh_step(self, marked, [saved, *previous])
+                s = self.solver
+            else:
+                record, (saved, *previous) = amr.refine(s, marked, [saved, *previous])
+                if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
+                    self.coupled.mesh_changed()
             self.refinements.append((self.step + 1, record))
-            if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
-                self.coupled.mesh_changed()
             pred = s.get_state()   # the refined solution (its load: path following solves for it)
             s.set_state(saved)
             s.u.vec.FV().NumPy()[:] = pred["u"]
@@ -307,7 +321,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
                 # the same kind of step (dissipation dD, or displacement) from the refined solution
                 self._path.mesh_changed(saved, previous)
                 s.alpha.vec.FV().NumPy()[:] = pred["alpha"]
-                ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new))
+                ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new), at_load=rm is not None)
             else:
                 ok, info = self._attempt(t_new)
             for k in totals:

@@ -27,6 +27,8 @@ class RunState:
         if self.refinements:  # the mesh of the state: the initial one refined as recorded (adapt.replay)
             st["refinements"] = [{"step": step, **rec.as_dict()} for step, rec in self.refinements]
             arrays["refined_elements"] = np.concatenate([rec.elements for _, rec in self.refinements])
+            if self._remesher is not None:   # the mesh is the geometry meshed with these restrictions
+                arrays["remesh_restrictions"] = self._remesher.restrictions.copy()
         if arrays:
             st["arrays"] = arrays
         return st
@@ -73,9 +75,21 @@ class RunState:
                              f"holds {flat.size}: it is damaged")
         marks = np.split(flat, np.cumsum(counts)[:-1])
         new = range(len(self.refinements), len(recorded))
-        replay(self.solver, [marks[k] for k in new])
-        if self.coupled is not None:
-            self.coupled.mesh_changed()
+        rows = (st.get("arrays") or {}).get("remesh_restrictions")
+        if rows is not None and self._remesher is None:
+            raise ValueError("this state is on a mesh refined by remeshing; resume it with the run's Adaptivity "
+                             "(remesh_maxh as recorded)")
+        if self._remesher is not None:   # remeshed: the geometry meshed with the recorded restrictions
+            if rows is None:
+                raise ValueError("this state of a refined run records no remeshing restrictions: it was refined by "
+                                 "bisection; resume it without Adaptivity remesh_maxh")
+            from .remesh import move
+            self._remesher.restrictions = np.asarray(rows, dtype=float).reshape(-1, 3)
+            move(self, self._remesher.mesh())
+        else:
+            replay(self.solver, [marks[k] for k in new])
+            if self.coupled is not None:
+                self.coupled.mesh_changed()
         for k in new:
             r = recorded[k]
             self.refinements.append((int(r["step"]), RefinementRecord.from_dict(r, marks[k])))

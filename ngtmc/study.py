@@ -54,6 +54,9 @@ SOLVER_PARAMETERS = {
     "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
                                      "their target (Adaptivity.size_tolerance; 1: the target is a strict bound, and "
                                      "sizes end between half the target and the target; 1.41: centred on it)"),
+    "amr_remesh_maxh": (0.0, "mm", "with h_crack: refine by generating a new mesh from the geometry (ngtmc.remesh) "
+                                   "instead of NGSolve's bisection; the global maxh the study's mesh is generated with "
+                                   "(checked: the geometry meshed with it must give the study's mesh again); 0: bisection"),
     "stop_after_drop": (0.0, "-", "stop each case once its force has fallen below this fraction of its peak, after "
                                   "the peak (the crack has run; Simulation.stop_after_drop); 0: the whole schedule"),
 }
@@ -63,12 +66,13 @@ _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 #: values then: they are left out of the parameter hashes and of the comparison of a resumed run
 #: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
 #: resume and compare.
-INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0}
+INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
+                            "amr_remesh_maxh": 0.0}
 
 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
 #: hashes and comparisons at that value, so that the runs still resume and compare.
-ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0}
+ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0}
 
 
 def effective_parameters(p: dict) -> dict:
@@ -117,9 +121,11 @@ def simulation_options(p: dict) -> dict:
         from .adapt import Adaptivity
         try:
             h_void = float(p.get("amr_h_void", 0.0))
+            maxh = float(p.get("amr_remesh_maxh", 0.0))
             out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
                                       h_void=h_void if h_void > 0 else None,
-                                      size_tolerance=float(p.get("amr_size_tolerance", 1.0)))
+                                      size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
+                                      remesh_maxh=maxh if maxh > 0 else None)
         except (TypeError, ValueError) as e:
             raise StudyError(str(e)) from None
     return out

@@ -210,6 +210,7 @@ class _Run(RunFolder):
                                  "mesh); start a new run")
         if ck is not None:
             sim.set_state(ck["state"])
+            snaps.solver = sim.solver   # remeshed: the state's mesh has a solver of its own
             if ck["snap"]:
                 snaps.restore(ck["snap"])
                 snaps.write_pvd()
@@ -267,6 +268,7 @@ class _Run(RunFolder):
             finish("failed", f"{type(e).__name__}: {e}")
             raise
         if not snaps.steps or snaps.steps[-1] != sim.step:
+            snaps.solver = sim.solver
             snaps.take(sim.rows[-1])
         last.state = sim.get_state()
         finish("completed")

@@ -1,0 +1,208 @@
+"""Refinement by remeshing (ngtmc.remesh): the geometry meshed again gives the scene's mesh back,
+a wrong maxh is refused, the state crosses the non-nested meshes (a homogeneous state exactly, H
+never below the old element's largest value where the mesh is refined, linear fields exactly
+elsewhere, alpha the old field at the new vertices), the refined zone comes out at its target
+size and is not refined twice, a remeshed path-following run converges and agrees with its final
+mesh used from the start, and it resumes from a checkpoint on the same mesh."""
+import dataclasses
+
+import numpy as np
+import ngsolve as ngs
+import pytest
+
+import ngtmc
+from ngtmc import adapt, remesh
+from ngtmc.adapt import Adaptivity
+from scenes import notched_plate
+
+MAXH = 0.2   # mm, the notched plate's global size below
+
+
+def _plate(**kw):
+    return adapt.private_scene(notched_plate(maxh=MAXH, h_band=0.2, l0=0.1, **kw))
+
+
+def _points(solver):
+    return remesh._history_points(solver)
+
+
+def _damaged(scene):
+    s = ngtmc.Solver(scene, compile=True)
+    for load in (0.004, 0.006, 0.007):
+        s.solve_phase_field()
+        assert s.solve_displacement(load).converged
+        s.update_history()
+    return s
+
+
+def test_geometry_meshed_again_gives_the_mesh_back_and_a_wrong_maxh_is_refused():
+    scene = _plate()
+    rm = remesh.Remesher(scene.mesh, MAXH)
+    again = rm.mesh()
+    assert np.array_equal(np.asarray(again.ngmesh.Coordinates()), np.asarray(scene.mesh.ngmesh.Coordinates()))
+    with pytest.raises(ValueError, match="remesh_maxh = 0.1 mm: the geometry meshed with it has"):
+        remesh.Remesher(scene.mesh, 0.1)
+    with pytest.raises(ValueError, match="remesh_maxh"):
+        Adaptivity(h_crack=0.05, remesh_maxh=-1.0)
+    with pytest.raises(ValueError, match="history_transfer"):
+        Adaptivity(h_crack=0.05, history_transfer="mean")
+
+
+def test_refined_zone_reaches_its_target_and_is_not_refined_again():
+    scene = _plate()
+    s = ngtmc.Solver(scene)
+    rm = remesh.Remesher(scene.mesh, MAXH)
+    a = Adaptivity(h_crack=0.025, remesh_maxh=MAXH)
+    c = remesh._centroids(s.mesh)
+    marked = np.hypot(c[:, 0] - 0.3, c[:, 1] - 0.5) < 0.15       # around the notch tip
+    rm.add(s.mesh, marked, adapt.targets(s, a))
+    fine = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()))
+    cf = remesh._centroids(fine.mesh)
+    near = np.hypot(cf[:, 0] - 0.3, cf[:, 1] - 0.5) < 0.1
+    print(f"\nremeshed: {s.mesh.ne} -> {fine.mesh.ne} elements; near the tip median longest edge "
+          f"{np.median(fine.h[near]):.4f} mm (target 0.025 mm)")
+    assert 0.6 * 0.025 < np.median(fine.h[near]) <= 1.2 * 0.025
+    covered = rm.covered(fine.mesh, adapt.targets(fine, a))
+    assert covered[near].all() and not covered[~near & (np.hypot(cf[:, 0] - 0.3, cf[:, 1] - 0.5) > 0.3)].any()
+
+
+def test_homogeneous_state_is_reproduced_exactly():
+    scene = _plate()
+    s = ngtmc.Solver(scene, compile=True)
+    # a homogeneous stretch of the plate (the top pulled 0.003 mm over its height 1 mm)
+    s.u.Set(ngs.CF((0.0, 0.003 * ngs.y)))
+    s.load = 0.003
+    s.H_committed[:] = 7.0
+    s.H.vec.FV().NumPy()[:] = 7.0
+    s.alpha.vec.FV().NumPy()[:] = 0.125
+    s.alpha_committed[:] = 0.125
+    energy = s.energies()
+    rm = remesh.Remesher(scene.mesh, MAXH)
+    c = remesh._centroids(s.mesh)
+    marked = np.hypot(c[:, 0] - 0.6, c[:, 1] - 0.3) < 0.2
+    rm.add(s.mesh, marked, adapt.targets(s, Adaptivity(h_crack=0.03)))
+    new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
+    remesh.transfer(s, new, refined=marked)
+    assert new.mesh.ne > s.mesh.ne
+    err = ngs.Integrate(ngs.InnerProduct(new.u - ngs.CF((0.0, 0.003 * ngs.y)), new.u - ngs.CF((0.0, 0.003 * ngs.y))),
+                        new.mesh)
+    assert np.sqrt(err) < 1e-12
+    assert np.allclose(new.H_committed, 7.0, rtol=0, atol=1e-12)
+    used = np.unique(remesh._element_nodes(new.mesh))
+    assert np.allclose(new.alpha.vec.FV().NumPy()[used], 0.125, atol=1e-12)
+    assert np.allclose(new.alpha_committed[used], 0.125, atol=1e-12)
+    for k, v in new.energies().items():
+        assert v == pytest.approx(energy[k], rel=1e-10, abs=1e-14), k
+
+
+def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the_new_vertices():
+    scene = _plate()
+    s = _damaged(scene)
+    assert np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
+    a = Adaptivity(h_crack=0.03, alpha_threshold=0.02, remesh_maxh=MAXH)
+    marked = adapt.mark(s, a)
+    assert 0 < marked.sum() < s.mesh.ne
+    rm = remesh.Remesher(scene.mesh, MAXH)
+    rm.add(s.mesh, marked, adapt.targets(s, a))
+    new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
+    remesh.transfer(s, new, refined=marked)
+    H_old = s.H_committed.reshape(s.mesh.ne, -1)
+    where = remesh.locate(s.mesh, _points(new))
+    H_new = new.H_committed
+    up = marked[where]
+    # in the refined elements: at least the largest value of the old element holding the point
+    assert np.all(H_new[up] >= H_old.max(axis=1)[where[up]] - 1e-12)
+    # everywhere: within the range of the old element's values (no new extremes)
+    assert np.all(H_new >= H_old.min(axis=1)[where] - 1e-12) and np.all(H_new <= H_old.max(axis=1)[where] + 1e-12)
+    # alpha: the old P1 field at every new vertex of the fracture region
+    xy = remesh._coordinates(new.mesh)
+    a_old = ngs.GridFunction(s.fes_a)
+    a_old.vec.FV().NumPy()[:] = s.alpha_committed
+    frac_vertices = np.unique(remesh._element_nodes(new.mesh))   # the plate is all fracture region
+    old_at = np.array([a_old(s.mesh(*xy[v])) for v in frac_vertices])
+    assert np.max(np.abs(new.alpha_committed[frac_vertices] - old_at)) < 1e-6
+
+
+def test_linear_history_is_carried_exactly():
+    scene = _plate()
+    s = ngtmc.Solver(scene, compile=True)
+    xy = _points(s)
+    s.H_committed[:] = 3.0 + 2.0 * xy[:, 0] - 1.5 * xy[:, 1]
+    rm = remesh.Remesher(scene.mesh, MAXH)
+    c = remesh._centroids(s.mesh)
+    marked = np.hypot(c[:, 0] - 0.5, c[:, 1] - 0.5) < 0.2
+    rm.add(s.mesh, marked, adapt.targets(s, Adaptivity(h_crack=0.03)))
+    new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
+    remesh.transfer(s, new, history="linear")
+    xy_new = _points(new)
+    # clipping to the old element's range moves a point of a new element only where it lies
+    # beyond the old element's points (near its vertices); within them the plane is exact
+    exact = 3.0 + 2.0 * xy_new[:, 0] - 1.5 * xy_new[:, 1]
+    err = np.abs(new.H_committed - exact)
+    assert np.median(err) < 1e-12 and np.max(err) < 2.0 * MAXH
+
+
+def test_remeshed_path_following_run_converges_and_agrees_with_its_final_mesh():
+    """The notched plate from its coarse mesh (maxh 0.2 mm, 202 elements) refined by remeshing to
+    h_crack = l0/4 while the crack runs; its peak is that of the same scheme on the run's final
+    mesh from the start to 2 %, every state accepted is an equilibrium, the dissipated energy
+    never decreases, and the run resumes from its checkpoint on the same mesh."""
+    scene = notched_plate(maxh=MAXH, h_band=0.2, l0=0.1)
+    control = ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7)
+    a = Adaptivity(h_crack=0.025, remesh_maxh=MAXH)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following",
+                           adapt=a)
+    states = []
+    for row in sim.steps():
+        if len(states) < 1 and sim.refinements:
+            states.append(sim.get_state())
+    h = sim.history
+    force = h["force"].to_numpy()
+    assert sim.refinements and h["elements"].iloc[-1] > 5 * h["elements"].iloc[0]
+    assert sim._path.coupled is sim.coupled and sim.coupled.s is sim.solver
+    assert np.all(np.diff(h["dissipated_energy"].to_numpy()) >= -1e-12 * h["dissipated_energy"].max())
+    assert force[-1] < 0.1 * force.max()
+    assert sim.coupled.solve(sim.solver.load).iterations == 0
+    final = sim.solver.scene
+    ref = ngtmc.Simulation(dataclasses.replace(final, mesh=ngs.Mesh(final.mesh.ngmesh.Copy())),
+                           ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following").run().history
+    print(f"\nremeshed run: {len(h) - 1} steps, {int(h['newton_iterations'].sum())} Newton iterations, "
+          f"{len(sim.refinements)} remeshes, {h['elements'].iloc[0]} -> {h['elements'].iloc[-1]} elements, peak "
+          f"{force.max():.6g} N/mm; final mesh from the start: {len(ref) - 1} steps, peak {ref['force'].max():.6g} N/mm")
+    assert force.max() == pytest.approx(ref["force"].max(), rel=2e-2)
+    # resume from the state after the first remesh: the same mesh, and the state is an equilibrium there
+    again = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following",
+                             adapt=a)
+    again.set_state(states[0])
+    st = states[0]["solver"]
+    assert again.solver.fes_u.ndof == st["u"].size and again.solver.irs.ndof == st["H"].size
+    assert again.coupled.solve(again.solver.load).iterations == 0
+    with pytest.raises(ValueError, match="refined by remeshing"):
+        ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following",
+                         adapt=Adaptivity(h_crack=0.025)).set_state(states[0])
+
+
+def test_run_folder_of_a_remeshed_run_keeps_each_snapshot_on_its_mesh(tmp_path):
+    """Snapshots, the ParaView series and the metadata of a run refined by remeshing (single
+    pass): one snapshot group per mesh, each with arrays that fit its own vertices and triangles,
+    and every VTK file with the points of its snapshot's mesh."""
+    import re
+    out = tmp_path / "run"
+    res = ngtmc.simulate(notched_plate(maxh=MAXH, h_band=0.2, l0=0.1), ngtmc.Schedule([0.0, 0.0065]),
+                         ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=0.0, du_min=1e-7), out_dir=out,
+                         adapt=Adaptivity(h_crack=0.07, remesh_maxh=MAXH), report=False, progress=False,
+                         threads=1, compile=True, snapshot_loads=[0.002, 0.004, 0.005, 0.0055, 0.006, 0.0065])
+    h = res.history
+    assert h["elements"].iloc[-1] > 1.5 * h["elements"].iloc[0]
+    z = np.load(out / "snapshots.npz")
+    groups = sorted({k.split("__")[0] for k in z.files}, key=lambda g: int(g.split("@")[1]))
+    assert len(groups) >= 2
+    for g in groups:
+        V, T, U, A = (z[f"{g}__{f}"] for f in ("vertices", "triangles", "u", "alpha"))
+        k = len(z[f"{g}__loads"])
+        assert U.shape == (k, len(V), 2) and A.shape == (k, len(V)) and T.max() == len(V) - 1
+    vtus = sorted((out / "vtk").glob("main_*.vtu"))
+    assert len(vtus) == 6
+    last = vtus[-1].read_text()
+    n_points = int(re.search(r'NumberOfPoints="(\d+)"', last).group(1))
+    assert n_points == res.solver.mesh.nv
