@@ -223,6 +223,16 @@ def _element_nodes(mesh) -> np.ndarray:
     return mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
 
 
+def _coordinates(mesh) -> np.ndarray:
+    """Vertex coordinates (x, y), mm."""
+    return np.asarray(mesh.ngmesh.Coordinates())[:, :2]
+
+
+def _centroids(mesh) -> np.ndarray:
+    """Centroid (x, y) of every triangle, mm."""
+    return _coordinates(mesh)[_element_nodes(mesh)].mean(axis=1)
+
+
 def _neighbours(mesh, flags: np.ndarray) -> np.ndarray:
     """Elements sharing a vertex with a flagged element (the flagged ones included)."""
     nodes = _element_nodes(mesh)
@@ -243,13 +253,13 @@ def targets(solver, adapt: Adaptivity) -> np.ndarray:
     return target
 
 
-def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, covered: np.ndarray | None = None) -> np.ndarray:
+def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, remesher=None) -> np.ndarray:
     """Elements to refine (boolean array over the elements) for the solver's current state.
 
     H: history at the history points (MPa), default the committed one; pass the trial history
-    of a step not yet committed. covered: elements already refined to their target by
-    remeshing (:meth:`ngtmc.remesh.Remesher.covered`), which count as fine whatever their size.
-    See the module docstring for the indicators."""
+    of a step not yet committed. remesher: a run refined by remeshing (:class:`ngtmc.remesh.Remesher`);
+    elements it has already refined to their target (:meth:`~ngtmc.remesh.Remesher.covered`)
+    count as fine whatever their size. See the module docstring for the indicators."""
     mesh = solver.mesh
     ne = mesh.ne
     frac, void = _element_regions(solver)
@@ -273,8 +283,8 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, covered: np.nda
             break
         flags = _neighbours(mesh, flags)
     coarse = solver.h > target * adapt.size_tolerance * (1.0 + 1e-9)
-    if covered is not None:
-        coarse &= ~covered
+    if remesher is not None:
+        coarse &= ~remesher.covered(mesh, target)
     if adapt.buffer_length > 0 and (flags & coarse).any():
         # hysteresis: only when the indicator reaches an element still to refine is the zone within
         # buffer_length refined too; the crack then runs about that far before the next refinement
@@ -286,9 +296,7 @@ def _within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:
     """Elements whose centroid lies within ``distance`` (mm) of a flagged element's centroid (the
     flagged ones included)."""
     from scipy.spatial import cKDTree
-    nodes = _element_nodes(mesh)
-    xy = np.asarray(mesh.ngmesh.Coordinates())[:, :2]
-    c = xy[nodes].mean(axis=1)
+    c = _centroids(mesh)
     d, _ = cKDTree(c[flags]).query(c, distance_upper_bound=distance)
     return flags | np.isfinite(d)
 

@@ -129,7 +129,6 @@ class SnapshotOutput(Plugin):
         self.prev_load = float(prev_load)
 
     def step(self, sim, row: dict):
-        self.snaps.solver = sim.solver   # a run refined by remeshing moves to a new solver
         self.snaps.maybe_take(self.prev_load, row, final=sim.finished)
         self.prev_load = float(row["load"])
 

@@ -88,13 +88,13 @@ class GatheredSnapshots(Snapshots):
     files on the serial mesh (``serial_scene``, the scene before distribution). ``vtk_dir``:
     rank 0's (the others' is ignored)."""
 
-    def __init__(self, case, solver, vtk_dir, comm, serial_scene):
+    def __init__(self, case, sim, vtk_dir, comm, serial_scene):
         self.comm = comm
         self.root = comm.rank == 0
         self.serial_scene = serial_scene
-        self.gather = RankGather(solver.mesh, serial_scene.mesh, comm)
+        self.gather = RankGather(sim.solver.mesh, serial_scene.mesh, comm)
         vtk_on = comm.bcast(vtk_dir is not None, root=0)   # a collective decision
-        super().__init__(case, solver, vtk_dir if self.root else None)
+        super().__init__(case, sim, vtk_dir if self.root else None)
         self._vtk_on = vtk_on
         self._geometry = None
 

@@ -44,27 +44,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 import dataclasses
-import re
 
 import numpy as np
 import ngsolve as ngs
 
-__all__ = ["Remesher", "transfer", "locate", "move", "remesh_step", "equilibrate", "HISTORY_TRANSFERS"]
+from .adapt import _centroids, _coordinates, _element_nodes, _element_regions
+
+__all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step", "equilibrate", "HISTORY_TRANSFERS"]
 
 #: how the history is carried to a new mesh (module docstring)
 HISTORY_TRANSFERS = ("max", "linear")
-
-
-def _element_nodes(mesh) -> np.ndarray:
-    return mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
-
-
-def _coordinates(mesh) -> np.ndarray:
-    return np.asarray(mesh.ngmesh.Coordinates())[:, :2]
-
-
-def _centroids(mesh) -> np.ndarray:
-    return _coordinates(mesh)[_element_nodes(mesh)].mean(axis=1)
 
 
 def locate(mesh, xy: np.ndarray) -> np.ndarray:
@@ -86,15 +75,14 @@ class Remesher:
     """The size restrictions of a remeshed run and the mesh they give (module docstring).
 
     maxh: the global size the scene's mesh was generated with, mm (its regions' own sizes are part
-    of the geometry). The restrictions are rows (x, y, h), mm."""
+    of the geometry; :class:`ngtmc.adapt.Adaptivity` checks the number). The restrictions are rows
+    (x, y, h), mm."""
 
     def __init__(self, mesh, maxh: float):
         geo = mesh.ngmesh.GetGeometry()
         if geo is None or not hasattr(geo, "GenerateMesh"):
             raise ValueError("remeshing (Adaptivity remesh_maxh) needs a mesh generated from a Netgen geometry "
                              "(netgen.occ.OCCGeometry or netgen.geom2d.SplineGeometry); this mesh has none")
-        if not (np.isfinite(maxh) and maxh > 0):
-            raise ValueError(f"Adaptivity remesh_maxh = {maxh!r} mm must be finite and > 0")
         self.geometry = geo
         self.maxh = float(maxh)
         self.curve_order = mesh.GetCurveOrder()
@@ -170,7 +158,7 @@ def scene_on(scene, old_mesh, new_mesh):
     return dataclasses.replace(scene, mesh=new_mesh, density=density)
 
 
-def _history_points(solver) -> np.ndarray:
+def history_points(solver) -> np.ndarray:
     """Coordinates (points, 2) of the solver's history points, element by element, mm."""
     g = solver._scratch_irs
     out = []
@@ -228,14 +216,11 @@ def transfer(old, new, states=(), history: str = "max", refined: np.ndarray | No
             o["load"] = np.array(st["load"])
     if old.alpha is not None:
         # each new vertex of a fracture element, seen from inside that element
-        mats = new.mesh.GetMaterials()
-        frac = np.array([bool(new._frac_re) and re.fullmatch(new._frac_re, mats[el.index]) is not None
-                         for el in new.mesh.Elements(ngs.VOL)])
+        frac = np.flatnonzero(_element_regions(new)[0])
         nodes = _element_nodes(new.mesh)
         xy = _coordinates(new.mesh)
         owner = np.full(new.mesh.nv, -1)
-        for e in np.flatnonzero(frac):
-            owner[nodes[e]] = e
+        owner[nodes[frac].ravel()] = np.repeat(frac, 3)
         verts = np.flatnonzero(owner >= 0)
         cen = xy[nodes[owner[verts]]].mean(axis=1)
         probe = xy[verts] + 1e-6 * (cen - xy[verts])
@@ -256,8 +241,8 @@ def transfer(old, new, states=(), history: str = "max", refined: np.ndarray | No
                 vals[verts] = got
                 o[key] = vals
     if any("H" in st for st in states):
-        xy_new = _history_points(new)
-        xy_old = _history_points(old)
+        xy_new = history_points(new)
+        xy_old = history_points(old)
         where = locate(old.mesh, xy_new)
         for st, o in zip(states, out):
             if "H" in st:
@@ -267,9 +252,10 @@ def transfer(old, new, states=(), history: str = "max", refined: np.ndarray | No
     return rest
 
 
-#: counters of a solver and a coupled Newton that a run keeps through a move to a new mesh
-_SOLVER_COUNTERS = ("floor_accepts", "energy_noise_switches", "timings", "floor_rtol")
-_COUPLED_COUNTERS = ("floor_accepts", "floor_worst", "levenberg_steps", "relaxations")
+#: what a run keeps of its solver and coupled Newton through a move to a new mesh: counters, the
+#: time split and the residual floor setting
+_SOLVER_CARRIED = ("floor_accepts", "energy_noise_switches", "timings", "floor_rtol")
+_COUPLED_CARRIED = ("floor_accepts", "floor_worst", "levenberg_steps", "relaxations", "relax")
 
 
 def move(sim, mesh, states=None, refined=None) -> list[dict]:
@@ -283,7 +269,7 @@ def move(sim, mesh, states=None, refined=None) -> list[dict]:
     scene = scene_on(old.scene, old.mesh, mesh)
     new = Solver(scene, **sim._solver_options)
     rest = transfer(old, new, states, sim.adapt.history_transfer, refined) if states is not None else []
-    for k in _SOLVER_COUNTERS:
+    for k in _SOLVER_CARRIED:
         if hasattr(old, k):
             setattr(new, k, getattr(old, k))
     new.mesh_generation = old.mesh_generation + 1
@@ -292,10 +278,9 @@ def move(sim, mesh, states=None, refined=None) -> list[dict]:
         from .coupled import CoupledNewton
         c_old = sim.coupled
         sim.coupled = c = CoupledNewton(new, **sim._coupled_options)
-        for k in _COUPLED_COUNTERS:
+        for k in _COUPLED_CARRIED:
             if hasattr(c_old, k):
                 setattr(c, k, getattr(c_old, k))
-        c.relax = c_old.relax
         if sim._path is not None:
             sim._path.coupled = c
             sim._path.sizing.solver = new
@@ -335,10 +320,9 @@ def equilibrate(sim, state: dict) -> dict:
     current = s.get_state()
     load = float(state["load"])
     s.set_state(state)
-    ok = False
+    ok, H_trial = False, None   # None: update_history takes the trial history of the converged u
     if sim.coupled is not None:
         ok = sim.coupled.solve(load).converged
-        H_trial = s.trial_history() if ok else None
     if not ok:
         s.set_state(state)
         ok, info = sim._passes(load, sim.max_staggered)

@@ -301,8 +301,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
         rm = self._remesher
         for _ in range(self.adapt.max_rounds):
             s = self.solver
-            covered = rm.covered(s.mesh, amr.targets(s, self.adapt)) if rm is not None else None
-            marked = amr.mark(s, self.adapt, info.get("H_trial"), covered=covered)
+            marked = amr.mark(s, self.adapt, info.get("H_trial"), remesher=rm)
             if not marked.any():
                 break
             previous = self._path.predictor_states() if self._path is not None else []

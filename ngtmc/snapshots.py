@@ -28,7 +28,7 @@ class Snapshots:
     keeps the mesh it was taken on (:attr:`meshes`, :attr:`mesh_of`), and the files then hold one
     group of snapshots per mesh (:meth:`arrays`)."""
 
-    def __init__(self, case: Case, solver, vtk_dir: Path | None):
+    def __init__(self, case: Case, sim, vtk_dir: Path | None):
         self.case = case
         self.targets = [float(x) for x in case.snapshot_loads]
         self.pending = list(range(len(self.targets)))
@@ -40,15 +40,22 @@ class Snapshots:
         self.meshes: list[dict] = []
         #: index into :attr:`meshes` of each snapshot
         self.mesh_of: list[int] = []
-        self.solver = solver
+        #: the :class:`~ngtmc.simulation.Simulation` whose solver's fields are taken (a run refined
+        #: by remeshing moves to a new solver, :mod:`ngtmc.remesh`)
+        self.sim = sim
         self.vtk_dir = vtk_dir
-        self.dim = solver.mesh.dim
+        self.dim = sim.solver.mesh.dim
         self._vtk = None
         self._vtk_mesh = None
         #: 3D with Case.section: the sampling grid (dict of plane, axes, coordinates) and alpha on it
         self._section_grid = None
         self.section: list[np.ndarray] = []
         self._current = None   # (mesh key, current_mesh()) of the solver's mesh
+
+    @property
+    def solver(self):
+        """The simulation's solver now."""
+        return self.sim.solver
 
     def current_mesh(self) -> dict:
         """Vertices (mm), triangles (2D; boundary triangles in 3D) and pseudo-density per triangle

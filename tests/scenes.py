@@ -90,3 +90,14 @@ def sheared_plate(maxh=0.1, l0=0.05, notch=0.5, **kw):
     tip curving down towards the bottom right corner: no band can be placed along it beforehand.
     E = 210e3 MPa, nu = 0.3, Gc = 2.7 N/mm; mm."""
     return _slit_plate(maxh, None, l0, notch, "x", **kw)
+
+
+def damaged(scene, loads=(0.004, 0.006, 0.007)):
+    """A solver of ``scene`` after single-pass steps to ``loads`` (mm): alpha and H vary from point
+    to point (the notched plates' transfer tests)."""
+    s = ngtmc.Solver(scene, compile=True)
+    for load in loads:
+        s.solve_phase_field()
+        assert s.solve_displacement(load).converged
+        s.update_history()
+    return s

@@ -14,32 +14,17 @@ import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
 from ngtmc.discretisation import bilinear_form
-from scenes import notched_plate, tension_bar, two_blocks
+from ngtmc.remesh import history_points
+from scenes import damaged, notched_plate, tension_bar, two_blocks
 
 
 def _copy_mesh(mesh):
     return ngs.Mesh(mesh.ngmesh.Copy())
 
 
-def _points(solver):
-    """Coordinates (x, y) of the history points, mm."""
-    g = ngs.GridFunction(solver.irs)
-    out = []
-    for c in (ngs.x, ngs.y):
-        g.Interpolate(c)
-        out.append(g.vec.FV().NumPy().copy())
-    return np.array(out).T
-
-
 def _damaged_notched_plate():
     """Coarse notched plate after a few single-pass steps: alpha and H vary from point to point."""
-    scene = notched_plate(maxh=0.2, h_band=0.05, l0=0.1)
-    s = ngtmc.Solver(scene, compile=True)
-    for load in (0.004, 0.006, 0.007):
-        s.solve_phase_field()
-        assert s.solve_displacement(load).converged
-        s.update_history()
-    return s
+    return damaged(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))
 
 
 def test_history_and_alpha_never_decrease_across_refinement():
@@ -47,7 +32,7 @@ def test_history_and_alpha_never_decrease_across_refinement():
     assert np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
     old_mesh = _copy_mesh(s.mesh)
     ne_old = s.mesh.ne
-    old_pts = _points(s)
+    old_pts = history_points(s)
     H_old = s.H_committed.copy().reshape(ne_old, -1)
     fes_a_old = ngs.H1(old_mesh, order=1, definedon=old_mesh.Materials(s._frac_re))
     a_old = ngs.GridFunction(fes_a_old)
@@ -59,7 +44,7 @@ def test_history_and_alpha_never_decrease_across_refinement():
     # H: at every new point, at least the old value at every point of the old element holding the
     # new element (located by the new element's centroid: the history points of order 1 lie on
     # the element edges, where locating the point itself picks either neighbour)
-    pts = _points(s)
+    pts = history_points(s)
     H_new = s.H_committed.reshape(s.mesh.ne, -1)
     coords = np.asarray(s.mesh.ngmesh.Coordinates())
     centroid = np.array([coords[[v.nr for v in el.vertices], :2].mean(axis=0) for el in s.mesh.Elements(ngs.VOL)])

@@ -13,26 +13,14 @@ import pytest
 import ngtmc
 from ngtmc import adapt, remesh
 from ngtmc.adapt import Adaptivity
-from scenes import notched_plate
+from ngtmc.remesh import history_points
+from scenes import damaged, notched_plate
 
 MAXH = 0.2   # mm, the notched plate's global size below
 
 
 def _plate(**kw):
     return adapt.private_scene(notched_plate(maxh=MAXH, h_band=0.2, l0=0.1, **kw))
-
-
-def _points(solver):
-    return remesh._history_points(solver)
-
-
-def _damaged(scene):
-    s = ngtmc.Solver(scene, compile=True)
-    for load in (0.004, 0.006, 0.007):
-        s.solve_phase_field()
-        assert s.solve_displacement(load).converged
-        s.update_history()
-    return s
 
 
 def test_geometry_meshed_again_gives_the_mesh_back_and_a_wrong_maxh_is_refused():
@@ -53,11 +41,11 @@ def test_refined_zone_reaches_its_target_and_is_not_refined_again():
     s = ngtmc.Solver(scene)
     rm = remesh.Remesher(scene.mesh, MAXH)
     a = Adaptivity(h_crack=0.025, remesh_maxh=MAXH)
-    c = remesh._centroids(s.mesh)
+    c = adapt._centroids(s.mesh)
     marked = np.hypot(c[:, 0] - 0.3, c[:, 1] - 0.5) < 0.15       # around the notch tip
     rm.add(s.mesh, marked, adapt.targets(s, a))
     fine = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()))
-    cf = remesh._centroids(fine.mesh)
+    cf = adapt._centroids(fine.mesh)
     near = np.hypot(cf[:, 0] - 0.3, cf[:, 1] - 0.5) < 0.1
     print(f"\nremeshed: {s.mesh.ne} -> {fine.mesh.ne} elements; near the tip median longest edge "
           f"{np.median(fine.h[near]):.4f} mm (target 0.025 mm)")
@@ -78,7 +66,7 @@ def test_homogeneous_state_is_reproduced_exactly():
     s.alpha_committed[:] = 0.125
     energy = s.energies()
     rm = remesh.Remesher(scene.mesh, MAXH)
-    c = remesh._centroids(s.mesh)
+    c = adapt._centroids(s.mesh)
     marked = np.hypot(c[:, 0] - 0.6, c[:, 1] - 0.3) < 0.2
     rm.add(s.mesh, marked, adapt.targets(s, Adaptivity(h_crack=0.03)))
     new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
@@ -88,7 +76,7 @@ def test_homogeneous_state_is_reproduced_exactly():
                         new.mesh)
     assert np.sqrt(err) < 1e-12
     assert np.allclose(new.H_committed, 7.0, rtol=0, atol=1e-12)
-    used = np.unique(remesh._element_nodes(new.mesh))
+    used = np.unique(adapt._element_nodes(new.mesh))
     assert np.allclose(new.alpha.vec.FV().NumPy()[used], 0.125, atol=1e-12)
     assert np.allclose(new.alpha_committed[used], 0.125, atol=1e-12)
     for k, v in new.energies().items():
@@ -97,7 +85,7 @@ def test_homogeneous_state_is_reproduced_exactly():
 
 def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the_new_vertices():
     scene = _plate()
-    s = _damaged(scene)
+    s = damaged(scene)
     assert np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
     a = Adaptivity(h_crack=0.03, alpha_threshold=0.02, remesh_maxh=MAXH)
     marked = adapt.mark(s, a)
@@ -107,7 +95,7 @@ def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the
     new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
     remesh.transfer(s, new, refined=marked)
     H_old = s.H_committed.reshape(s.mesh.ne, -1)
-    where = remesh.locate(s.mesh, _points(new))
+    where = remesh.locate(s.mesh, history_points(new))
     H_new = new.H_committed
     up = marked[where]
     # in the refined elements: at least the largest value of the old element holding the point
@@ -115,10 +103,10 @@ def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the
     # everywhere: within the range of the old element's values (no new extremes)
     assert np.all(H_new >= H_old.min(axis=1)[where] - 1e-12) and np.all(H_new <= H_old.max(axis=1)[where] + 1e-12)
     # alpha: the old P1 field at every new vertex of the fracture region
-    xy = remesh._coordinates(new.mesh)
+    xy = adapt._coordinates(new.mesh)
     a_old = ngs.GridFunction(s.fes_a)
     a_old.vec.FV().NumPy()[:] = s.alpha_committed
-    frac_vertices = np.unique(remesh._element_nodes(new.mesh))   # the plate is all fracture region
+    frac_vertices = np.unique(adapt._element_nodes(new.mesh))   # the plate is all fracture region
     old_at = np.array([a_old(s.mesh(*xy[v])) for v in frac_vertices])
     assert np.max(np.abs(new.alpha_committed[frac_vertices] - old_at)) < 1e-6
 
@@ -126,15 +114,15 @@ def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the
 def test_linear_history_is_carried_exactly():
     scene = _plate()
     s = ngtmc.Solver(scene, compile=True)
-    xy = _points(s)
+    xy = history_points(s)
     s.H_committed[:] = 3.0 + 2.0 * xy[:, 0] - 1.5 * xy[:, 1]
     rm = remesh.Remesher(scene.mesh, MAXH)
-    c = remesh._centroids(s.mesh)
+    c = adapt._centroids(s.mesh)
     marked = np.hypot(c[:, 0] - 0.5, c[:, 1] - 0.5) < 0.2
     rm.add(s.mesh, marked, adapt.targets(s, Adaptivity(h_crack=0.03)))
     new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
     remesh.transfer(s, new, history="linear")
-    xy_new = _points(new)
+    xy_new = history_points(new)
     # clipping to the old element's range moves a point of a new element only where it lies
     # beyond the old element's points (near its vertices); within them the plane is exact
     exact = 3.0 + 2.0 * xy_new[:, 0] - 1.5 * xy_new[:, 1]

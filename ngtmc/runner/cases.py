@@ -197,10 +197,10 @@ class _Run(RunFolder):
                           f"(set-up {build_time:.1f} s)")
         vtk_dir = self.out / "vtk" if self.vtk else None
         if self.comm is None:
-            snaps = Snapshots(case, sim.solver, vtk_dir)
+            snaps = Snapshots(case, sim, vtk_dir)
         else:  # the fields gathered on rank 0 in the serial mesh's numbering; each rank checkpoints its part
             from ..rank_snapshots import GatheredSnapshots
-            snaps = GatheredSnapshots(case, sim.solver, vtk_dir, self.comm, serial)
+            snaps = GatheredSnapshots(case, sim, vtk_dir, self.comm, serial)
         fingerprint = _rank_fingerprint(sim.solver) if self.comm is not None else None
         if ck is not None and fingerprint is not None:
             same = ck.get("mpi_fingerprint") is not None and np.array_equal(ck["mpi_fingerprint"], fingerprint)
@@ -210,7 +210,6 @@ class _Run(RunFolder):
                                  "mesh); start a new run")
         if ck is not None:
             sim.set_state(ck["state"])
-            snaps.solver = sim.solver   # remeshed: the state's mesh has a solver of its own
             if ck["snap"]:
                 snaps.restore(ck["snap"])
                 snaps.write_pvd()
@@ -268,7 +267,6 @@ class _Run(RunFolder):
             finish("failed", f"{type(e).__name__}: {e}")
             raise
         if not snaps.steps or snaps.steps[-1] != sim.step:
-            snaps.solver = sim.solver
             snaps.take(sim.rows[-1])
         last.state = sim.get_state()
         finish("completed")
