@@ -21,7 +21,8 @@ geometry again with Netgen:
 The state is carried across the two meshes, which are not nested (:func:`transfer`):
 
 * u by NGSolve's ``Set`` of the old field (evaluated across meshes), exact for fields the new space
-  can represent;
+  can represent; where it folds an element of the new mesh (a squeezed void), halved until it
+  does not (:func:`_admissible`);
 * alpha by nodal interpolation: the old P1 field evaluated at every new vertex, from inside one
   of the vertex's new fracture elements (region boundaries are geometry edges, so they lie on
   each other in both meshes);
@@ -50,7 +51,8 @@ import ngsolve as ngs
 
 from .adapt import _centroids, _coordinates, _element_nodes, _element_regions
 
-__all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step", "equilibrate", "HISTORY_TRANSFERS"]
+__all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step", "equilibrate", "consistent",
+           "HISTORY_TRANSFERS"]
 
 #: how the history is carried to a new mesh (module docstring)
 HISTORY_TRANSFERS = ("max", "linear")
@@ -196,6 +198,31 @@ def _linear_fit(Hp, where, xy_new, xy_old):
     return np.clip(val, V.min(axis=1), V.max(axis=1))
 
 
+#: halvings of a carried u that inverts an element of the new mesh (:func:`_admissible`)
+RETREATS = 10
+
+
+def _admissible(new, u: np.ndarray) -> np.ndarray:
+    """The carried displacement dofs ``u`` of the solver ``new``, halved (at most RETREATS times)
+    until det F > 0 at every guard point of the new mesh. Why: in a void squeezed to J of about
+    0.004 under the indenter (the paper-resolution three-point bending with the void refined,
+    2026-12-04), the field set on a different mesh folded elements (min J -0.009), and every step
+    from there failed with a residual that is not finite. A halved u is no equilibrium, but an
+    admissible start: the displacement Newton carries the boundary values back to the load."""
+    x = new.u.vec.FV().NumPy()
+    keep = x.copy()
+    factor = 1.0
+    for _ in range(RETREATS):
+        x[:] = factor * u
+        if new.min_J() > 0.0:
+            break
+        factor *= 0.5
+    else:
+        factor = 0.0
+    x[:] = keep
+    return factor * u
+
+
 def transfer(old, new, states=(), history: str = "max", refined: np.ndarray | None = None) -> list[dict]:
     """Carry the solver ``old``'s fields, and further states of
     :meth:`~ngtmc.solver.Solver.get_state` (some may hold only ``u`` and ``alpha``), to the solver
@@ -211,7 +238,7 @@ def transfer(old, new, states=(), history: str = "max", refined: np.ndarray | No
     for st, o in zip(states, out):
         u_old.vec.FV().NumPy()[:] = st["u"]
         u_new.Set(u_old)
-        o["u"] = u_new.vec.FV().NumPy().copy()
+        o["u"] = _admissible(new, u_new.vec.FV().NumPy())
         if "load" in st:
             o["load"] = np.array(st["load"])
     if old.alpha is not None:
@@ -307,7 +334,8 @@ def remesh_step(sim, marked: np.ndarray, states: list) -> tuple:
 def equilibrate(sim, state: dict) -> dict:
     """``state`` (carried to a new mesh) brought to equilibrium there at its load, and committed
     (H may only grow, alpha with it): the coupled Newton, and where it fails the converged
-    staggered passes; the state as it is where both fail or the scene has no phase field.
+    staggered passes; where both fail, the state made :func:`consistent` with its history; the
+    state as it is where the scene has no phase field.
 
     Why: the interpolated fields are not an equilibrium of the new mesh. The phase field that the
     carried history drives on the new mesh differs from the carried alpha, so the state before the
@@ -327,9 +355,31 @@ def equilibrate(sim, state: dict) -> dict:
         s.set_state(state)
         ok, info = sim._passes(load, sim.max_staggered)
         H_trial = info.get("H_trial")
-    out = state
     if ok:
         s.update_history(H_trial)
         out = s.get_state()
+    else:
+        out = consistent(s, state)
     s.set_state(current)
     return out
+
+
+def consistent(solver, state: dict) -> dict:
+    """``state`` (carried to a new mesh) made consistent with its own history where no equilibrium
+    at its load is found (:func:`equilibrate`): alpha raised to the phase field that the carried
+    H drives (never lowered; committed with it), then u solved at that alpha and the load (kept
+    as carried where that solve fails). H stays as carried.
+
+    Why: in the quick three-point bending's crack run (a snap-back, 0.092 mm) the carried alpha is
+    below what the carried H drives (its nodal interpolation of the sharp profile loses 1.6 % of
+    the dissipation) and the carried u strains the new elements beyond H at 1670 of 14700 history
+    points; from that state every step failed, down to 1e-8 mm. From the consistent state the run
+    goes on (docs/adaptivity.md, "Refinement by remeshing")."""
+    s = solver
+    s.set_state(state)
+    s.solve_phase_field()             # the carried H, bounded below by the carried alpha
+    s.alpha_committed = s.alpha.vec.FV().NumPy().copy()
+    keep_u = s.u.vec.FV().NumPy().copy()
+    if not s.solve_displacement(float(state["load"])).converged:
+        s.u.vec.FV().NumPy()[:] = keep_u
+    return s.get_state()

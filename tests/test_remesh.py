@@ -111,6 +111,48 @@ def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the
     assert np.max(np.abs(new.alpha_committed[frac_vertices] - old_at)) < 1e-6
 
 
+def test_consistent_state_raises_alpha_to_its_history_and_balances_u():
+    """The fallback of a failed equilibration: alpha raised (never lowered) to the phase field of
+    the carried H, committed with it; u an equilibrium at that alpha; H as carried."""
+    scene = _plate()
+    s = damaged(scene)
+    a = Adaptivity(h_crack=0.03, alpha_threshold=0.02, remesh_maxh=MAXH)
+    marked = adapt.mark(s, a)
+    rm = remesh.Remesher(scene.mesh, MAXH)
+    rm.add(s.mesh, marked, adapt.targets(s, a))
+    new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
+    remesh.transfer(s, new, refined=marked)
+    carried = new.get_state()
+    assert new.solve_displacement(float(carried["load"])).iterations > 0   # the carried u is not balanced
+    out = remesh.consistent(new, carried)
+    assert np.all(out["alpha"] >= carried["alpha"]) and np.any(out["alpha"] > carried["alpha"] + 1e-3)
+    assert np.array_equal(out["alpha_committed"], out["alpha"]) and np.array_equal(out["H"], carried["H"])
+    assert float(out["load"]) == float(carried["load"])
+    # alpha is the phase field of the carried H: solving it again changes nothing
+    new.set_state(out)
+    new.solve_phase_field()
+    assert np.max(np.abs(new.alpha.vec.FV().NumPy() - out["alpha"])) < 1e-12
+    # u balances that alpha at the load: the displacement Newton has nothing to do
+    new.set_state(out)
+    assert new.solve_displacement(float(out["load"])).iterations == 0
+
+
+def test_carried_displacement_that_folds_an_element_is_halved_until_it_does_not():
+    s = ngtmc.Solver(_plate(), compile=True)
+    s.u.Set(ngs.CoefficientFunction((1e-3 * ngs.x, -0.5e-3 * ngs.y)))      # a small stretch: admissible
+    u = s.u.vec.FV().NumPy().copy()
+    assert s.min_J() > 0 and np.array_equal(remesh._admissible(s, u), u)
+    # x -> x - 1.5 x: J = -0.5 everywhere; halved once, x -> x - 0.75 x, J = 0.25
+    s.u.Set(ngs.CoefficientFunction((-1.5 * ngs.x, 0.0)))
+    fold = s.u.vec.FV().NumPy().copy()
+    assert s.min_J() == pytest.approx(-0.5)
+    out = remesh._admissible(s, fold)
+    assert np.array_equal(s.u.vec.FV().NumPy(), fold)                   # the solver's u is left as it was
+    assert np.allclose(out, 0.5 * fold)
+    s.u.vec.FV().NumPy()[:] = out
+    assert s.min_J() == pytest.approx(0.25)
+
+
 def test_linear_history_is_carried_exactly():
     scene = _plate()
     s = ngtmc.Solver(scene, compile=True)
