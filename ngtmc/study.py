@@ -57,6 +57,9 @@ SOLVER_PARAMETERS = {
     "amr_remesh_maxh": (0.0, "mm", "with h_crack: refine by generating a new mesh from the geometry (ngtmc.remesh) "
                                    "instead of NGSolve's bisection; the global maxh the study's mesh is generated with "
                                    "(checked: the geometry meshed with it must give the study's mesh again); 0: bisection"),
+    "amr_history_fraction": (1.0, "-", "with h_crack: elements whose history H reaches this fraction of H_c = Gc / (6 l0) "
+                                       "(the level at which AT-2 peaks; Adaptivity.history_fraction) are refined, in "
+                                       "(0, 1]; lower refines earlier, before the crack starts"),
     "stop_after_drop": (0.0, "-", "stop each case once its force has fallen below this fraction of its peak, after "
                                   "the peak (the crack has run; Simulation.stop_after_drop); 0: the whole schedule"),
 }
@@ -67,12 +70,13 @@ _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 #: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
 #: resume and compare.
 INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
-                            "amr_remesh_maxh": 0.0}
+                            "amr_remesh_maxh": 0.0, "amr_history_fraction": 1.0}
 
 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
 #: hashes and comparisons at that value, so that the runs still resume and compare.
-ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0}
+ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
+                    "amr_history_fraction": 1.0}
 
 
 def effective_parameters(p: dict) -> dict:
@@ -125,6 +129,7 @@ def simulation_options(p: dict) -> dict:
             out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
                                       h_void=h_void if h_void > 0 else None,
                                       size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
+                                      history_fraction=float(p.get("amr_history_fraction", 1.0)),
                                       remesh_maxh=maxh if maxh > 0 else None)
         except (TypeError, ValueError) as e:
             raise StudyError(str(e)) from None
