@@ -357,6 +357,7 @@ class DissipationPath:
         else:
             self.x_prev, self.load_prev = None, None
         self.d_prev = self.coupled.D.value(np.asarray(before["alpha_committed"], dtype=float))
+        self.load_n = float(before["load"])
 
     def resolve(self, load: float, t_new: float, at_load: bool = False):
         """Solve the step just converged on the old mesh again on the refined one (predictor-

@@ -34,9 +34,10 @@ The state is carried across the two meshes, which are not nested (:func:`transfe
   element at every remesh, and the remeshed notched plate (then without the equilibration
   below) failed after 8 steps where the fit went through.
 
-The simulation then (:func:`remesh_step`) brings the state before the step to equilibrium on the
-new mesh (:func:`equilibrate`) and solves the step again there at the load the old mesh's step
-reached (path following too: :meth:`ngtmc.path.DissipationPath.resolve` with ``at_load``).
+The simulation then (:func:`remesh_step`) solves u of the carried states at their alpha, brings the
+state before the step to equilibrium on the new mesh (:mod:`ngtmc.carried_state`) and solves the
+step again there at the load the old mesh's step reached (path following too:
+:meth:`ngtmc.path.DissipationPath.resolve` with ``at_load``).
 
 The remeshed run's meshes have no parent relation, so :mod:`ngtmc.sensitivities` refuses such a
 run as it refuses a bisected one. Units: mm.
@@ -51,8 +52,7 @@ import ngsolve as ngs
 
 from .adapt import _centroids, _coordinates, _element_nodes, _element_regions
 
-__all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step", "equilibrate", "consistent",
-           "HISTORY_TRANSFERS"]
+__all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step", "HISTORY_TRANSFERS"]
 
 #: how the history is carried to a new mesh (module docstring)
 HISTORY_TRANSFERS = ("max", "linear")
@@ -321,65 +321,19 @@ def remesh_step(sim, marked: np.ndarray, states: list) -> tuple:
     mesh); the record's elements are the marked ones of the old mesh (a resume replays the
     restrictions, :meth:`ngtmc.simulation_state.RunState.set_state`)."""
     from .adapt import RefinementRecord, targets
+    from .carried_state import balance, equilibrate
     s = sim.solver
     ne_old, dofs_old = s.mesh.ne, s.fes_u.ndof
     sim._remesher.add(s.mesh, marked, targets(s, sim.adapt))
     states = move(sim, sim._remesher.mesh(), states, refined=marked)
+    s = sim.solver
+    if s.alpha is not None:   # u of the step's and the saved state balanced at their carried alpha
+        balance(s, s.get_state(), in_place=True)
+        states[0] = balance(s, states[0])
+    load = float(states[0]["load"])
     states[0] = equilibrate(sim, states[0])
+    if sim._path is not None and float(states[0]["load"]) != load:   # settled below its load
+        sim.t = sim._path._time_of(float(states[0]["load"]), *sim._path._segment())
     record = RefinementRecord(int(marked.sum()), ne_old, sim.solver.mesh.ne, dofs_old, sim.solver.fes_u.ndof,
                               np.flatnonzero(marked).astype(np.int64))
     return record, states
-
-
-def equilibrate(sim, state: dict) -> dict:
-    """``state`` (carried to a new mesh) brought to equilibrium there at its load, and committed
-    (H may only grow, alpha with it): the coupled Newton, and where it fails the converged
-    staggered passes; where both fail, the state made :func:`consistent` with its history; the
-    state as it is where the scene has no phase field.
-
-    Why: the interpolated fields are not an equilibrium of the new mesh. The phase field that the
-    carried history drives on the new mesh differs from the carried alpha, so the state before the
-    step already holds a dissipation of its own: a path-following re-solve of a smaller dissipation
-    has no solution, and its load runs off (the sheared plate) or its Newton stalls at every
-    dissipation step down to 1/128 of the base (the quick three-point bending's fourth remesh)."""
-    s = sim.solver
-    if s.alpha is None:
-        return state
-    current = s.get_state()
-    load = float(state["load"])
-    s.set_state(state)
-    ok, H_trial = False, None   # None: update_history takes the trial history of the converged u
-    if sim.coupled is not None:
-        ok = sim.coupled.solve(load).converged
-    if not ok:
-        s.set_state(state)
-        ok, info = sim._passes(load, sim.max_staggered)
-        H_trial = info.get("H_trial")
-    if ok:
-        s.update_history(H_trial)
-        out = s.get_state()
-    else:
-        out = consistent(s, state)
-    s.set_state(current)
-    return out
-
-
-def consistent(solver, state: dict) -> dict:
-    """``state`` (carried to a new mesh) made consistent with its own history where no equilibrium
-    at its load is found (:func:`equilibrate`): alpha raised to the phase field that the carried
-    H drives (never lowered; committed with it), then u solved at that alpha and the load (kept
-    as carried where that solve fails). H stays as carried.
-
-    Why: in the quick three-point bending's crack run (a snap-back, 0.092 mm) the carried alpha is
-    below what the carried H drives (its nodal interpolation of the sharp profile loses 1.6 % of
-    the dissipation) and the carried u strains the new elements beyond H at 1670 of 14700 history
-    points; from that state every step failed, down to 1e-8 mm. From the consistent state the run
-    goes on (docs/adaptivity.md, "Refinement by remeshing")."""
-    s = solver
-    s.set_state(state)
-    s.solve_phase_field()             # the carried H, bounded below by the carried alpha
-    s.alpha_committed = s.alpha.vec.FV().NumPy().copy()
-    keep_u = s.u.vec.FV().NumPy().copy()
-    if not s.solve_displacement(float(state["load"])).converged:
-        s.u.vec.FV().NumPy()[:] = keep_u
-    return s.get_state()

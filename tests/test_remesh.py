@@ -11,7 +11,7 @@ import ngsolve as ngs
 import pytest
 
 import ngtmc
-from ngtmc import adapt, remesh
+from ngtmc import adapt, carried_state, remesh
 from ngtmc.adapt import Adaptivity
 from ngtmc.remesh import history_points
 from scenes import damaged, notched_plate
@@ -124,7 +124,7 @@ def test_consistent_state_raises_alpha_to_its_history_and_balances_u():
     remesh.transfer(s, new, refined=marked)
     carried = new.get_state()
     assert new.solve_displacement(float(carried["load"])).iterations > 0   # the carried u is not balanced
-    out = remesh.consistent(new, carried)
+    out = carried_state.consistent(new, carried)
     assert np.all(out["alpha"] >= carried["alpha"]) and np.any(out["alpha"] > carried["alpha"] + 1e-3)
     assert np.array_equal(out["alpha_committed"], out["alpha"]) and np.array_equal(out["H"], carried["H"])
     assert float(out["load"]) == float(carried["load"])
@@ -151,6 +151,24 @@ def test_carried_displacement_that_folds_an_element_is_halved_until_it_does_not(
     assert np.allclose(out, 0.5 * fold)
     s.u.vec.FV().NumPy()[:] = out
     assert s.min_J() == pytest.approx(0.25)
+
+
+def test_settled_state_is_an_equilibrium_below_its_load():
+    """settle: the first load of SETTLE_LOADS below the state's own at which an equilibrium is
+    found; the state there is committed (H and alpha never below the state's) and balanced."""
+    scene = notched_plate(maxh=MAXH, h_band=0.2, l0=0.1)
+    control = ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.005]), control, compile=True, scheme="path-following")
+    sim.run()
+    s = sim.solver
+    state = s.get_state()
+    assert s.max_alpha() > 0.05
+    out = carried_state.settle(sim, state)
+    assert float(out["load"]) == pytest.approx(carried_state.SETTLE_LOADS[0] * float(state["load"]), rel=1e-12)
+    assert np.all(out["H"] >= state["H"]) and np.all(out["alpha"] >= state["alpha_committed"] - 1e-12)
+    assert np.array_equal(out["alpha_committed"], out["alpha"])
+    s.set_state(out)
+    assert sim.coupled.solve(float(out["load"])).iterations == 0
 
 
 def test_linear_history_is_carried_exactly():
