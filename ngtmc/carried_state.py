@@ -60,24 +60,32 @@ def equilibrate(sim, state: dict) -> dict:
     if s.alpha is None:
         return state
     current = s.get_state()
-    load = float(state["load"])
+    out = _equilibrium(sim, state, float(state["load"]))
+    if out is None:
+        out = consistent(s, state)
+        if sim._path is not None:
+            out = settle(sim, out)
+    s.set_state(current)
+    return out
+
+
+def _equilibrium(sim, state: dict, load: float, u_first: bool = False) -> dict | None:
+    """The equilibrium at ``load`` (mm) from ``state``, committed (H may only grow, alpha with
+    it): the coupled Newton (after a u solve at the state's alpha with ``u_first``), else the
+    converged staggered passes; None where both fail. Leaves the solver at the result."""
+    s = sim.solver
     s.set_state(state)
     ok, H_trial = False, None   # None: update_history takes the trial history of the converged u
-    if sim.coupled is not None:
+    if sim.coupled is not None and (not u_first or s.solve_displacement(load).converged):
         ok = sim.coupled.solve(load).converged
     if not ok:
         s.set_state(state)
         ok, info = sim._passes(load, sim.max_staggered)
         H_trial = info.get("H_trial")
-    if ok:
-        s.update_history(H_trial)
-        out = s.get_state()
-    elif sim._path is not None:
-        out = settle(sim, consistent(s, state))
-    else:
-        out = consistent(s, state)
-    s.set_state(current)
-    return out
+    if not ok:
+        return None
+    s.update_history(H_trial)
+    return s.get_state()
 
 
 #: loads, as fractions of the carried one, at which :func:`settle` looks for an equilibrium
@@ -95,21 +103,11 @@ def settle(sim, state: dict) -> dict:
     D more and no equilibrium is near (the quick three-point bending at 0.0921 mm); at lower loads
     the release falls (0.6 % at 0.9, 0.23 % at 0.8 of the load), its crack holds, and the path
     follows on from there."""
-    s = sim.solver
     load = float(state["load"])
     for f in SETTLE_LOADS:
-        lam = f * load
-        s.set_state(state)
-        ok, H_trial = False, None
-        if s.solve_displacement(lam).converged:
-            ok = sim.coupled.solve(lam).converged
-        if not ok:
-            s.set_state(state)
-            ok, info = sim._passes(lam, sim.max_staggered)
-            H_trial = info.get("H_trial")
-        if ok:
-            s.update_history(H_trial)
-            return s.get_state()
+        out = _equilibrium(sim, state, f * load, u_first=True)
+        if out is not None:
+            return out
     return state
 
 
@@ -121,9 +119,9 @@ def consistent(solver, state: dict) -> dict:
 
     Why: in the quick three-point bending's crack run (a snap-back, 0.092 mm) the carried alpha is
     below what the carried H drives (its nodal interpolation of the sharp profile loses 1.6 % of
-    the dissipation) and the carried u strains the new elements beyond H at 1670 of 14700 history
-    points; from that state every step failed, down to 1e-8 mm. From the consistent state the run
-    goes on (docs/adaptivity.md, "Refinement by remeshing")."""
+    the dissipation) and the carried u strains the new elements beyond H at 1670 history points;
+    from that state every step failed, down to 1e-8 mm. From the consistent state, settled, the run
+    finishes its curve (docs/adaptivity.md, "Refinement by remeshing")."""
     s = solver
     s.set_state(state)
     s.solve_phase_field()             # the carried H, bounded below by the carried alpha
