@@ -350,14 +350,19 @@ class DissipationPath:
         transferred to the refined mesh, ``previous`` the :meth:`predictor_states` transferred
         with it. The secant predictor goes on through those two states (without ``previous`` it
         restarts from ``before``), and the dissipation of the last accepted state is taken again on
-        the refined mesh (the same P1 field, so the same value to round-off)."""
+        the refined mesh (the same P1 field, so the same value to round-off). Where ``before``
+        was settled below its load on the new mesh (:func:`ngtmc.carried_state.settle`), the run
+        goes on from that load: the simulation's pseudo-time and the last load follow it."""
         self.x_n = (np.array(before["u"], dtype=float), np.array(before["alpha"], dtype=float))
         if previous and self.x_prev is not None:
             self.x_prev = (np.array(previous[0]["u"], dtype=float), np.array(previous[0]["alpha"], dtype=float))
         else:
             self.x_prev, self.load_prev = None, None
         self.d_prev = self.coupled.D.value(np.asarray(before["alpha_committed"], dtype=float))
-        self.load_n = float(before["load"])
+        load = float(before["load"])
+        if load != self.load_n:   # settled below its load
+            self.sim.t = self._time_of(load, *self._segment())
+        self.load_n = load
 
     def resolve(self, load: float, t_new: float, at_load: bool = False):
         """Solve the step just converged on the old mesh again on the refined one (predictor-

@@ -330,10 +330,7 @@ def remesh_step(sim, marked: np.ndarray, states: list) -> tuple:
     if s.alpha is not None:   # u of the step's and the saved state balanced at their carried alpha
         balance(s, s.get_state(), in_place=True)
         states[0] = balance(s, states[0])
-    load = float(states[0]["load"])
-    states[0] = equilibrate(sim, states[0])
-    if sim._path is not None and float(states[0]["load"]) != load:   # settled below its load
-        sim.t = sim._path._time_of(float(states[0]["load"]), *sim._path._segment())
+    states[0] = equilibrate(sim, states[0])   # may settle it below its load (the path follows it)
     record = RefinementRecord(int(marked.sum()), ne_old, sim.solver.mesh.ne, dofs_old, sim.solver.fes_u.ndof,
                               np.flatnonzero(marked).astype(np.int64))
     return record, states
