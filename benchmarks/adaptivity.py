@@ -82,14 +82,12 @@ def _tag(scheme: str | None, default: str | None = None) -> str:
 
 def compare(scene_name: str, scheme: str | None = None):
     """Distances between the crack vertices of the adaptive and the uniform run (mm)."""
-    from scipy.spatial import cKDTree
+    from benchmarks.crack_paths import distances
     a = np.load(RESULTS / f"adaptivity-{scene_name}-amr{_tag(scheme)}-crack.npy")
     u = np.load(RESULTS / f"adaptivity-{scene_name}-uniform{_tag(scheme)}-crack.npy")
     out = {"scene": scene_name, "h_crack": H_CRACK, "points_amr": len(a), "points_uniform": len(u)}
     for name, p, q in (("amr_to_uniform", a, u), ("uniform_to_amr", u, a)):
-        d, _ = cKDTree(q).query(p)
-        out[name] = {"mean": float(d.mean()), "p95": float(np.percentile(d, 95)), "max": float(d.max()),
-                     "max_in_h_crack": float(d.max() / H_CRACK)}
+        out[name] = distances(p, q, H_CRACK)
     print(json.dumps(out), flush=True)
     return out
 
