@@ -314,6 +314,12 @@ def check_parameters(p: dict):
     if p.get("sphere_symmetry", "quarter") not in ("half", "quarter"):
         raise StudyError(f"three_point_bending_3d: sphere_symmetry = {p.get('sphere_symmetry')!r} is not 'half' "
                          "or 'quarter'")
+    if float(p.get("h_crack", 0.0) or 0.0) > 0:
+        # refused before any case runs: the 2D twin alone would refine, and the slab and the
+        # hemisphere would then fail (ngtmc.adapt.check_solver)
+        raise StudyError(f"three_point_bending_3d: h_crack = {p['h_crack']!r} mm asks for adaptive refinement, which "
+                         "is implemented for 2D meshes only; the slab and the hemisphere are 3D. For a remeshed or "
+                         "refined three-point bending run the 2D study: ngtmc run three-point-bending --set h_crack=...")
     if not float(p["slab_thickness"]) > 0:
         raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm must be > 0")
     try:

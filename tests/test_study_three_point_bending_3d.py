@@ -27,6 +27,9 @@ def test_the_study_is_registered_and_refuses_bad_parts():
     _, p = study_parameters(study, "quick", {"sphere_radius": 0.6})
     with pytest.raises(StudyError, match="sphere_radius"):
         study.cases(p)
+    _, p = study_parameters(study, "quick", {"h_crack": 0.01})   # 2D only: refused before any case runs
+    with pytest.raises(StudyError, match="h_crack.*2D meshes only"):
+        study.cases(p)
 
 
 def test_cases_follow_parts():
