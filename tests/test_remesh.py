@@ -171,6 +171,22 @@ def test_settled_state_is_an_equilibrium_below_its_load():
     assert sim.coupled.solve(float(out["load"])).iterations == 0
 
 
+def test_equilibration_under_path_following_tries_no_fixed_load_passes(monkeypatch):
+    """Where the coupled Newton finds no equilibrium of a carried state at its load, path following
+    goes to settle, not to staggered passes at that load (they would grow a crack past its
+    critical load off the path); other schemes keep the passes."""
+    scene = notched_plate(maxh=MAXH, h_band=0.2, l0=0.1)
+    control = ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7)
+    for scheme, passes_expected in (("path-following", 0), ("monolithic", 1)):
+        sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.005]), control, compile=True, scheme=scheme)
+        state = sim.solver.get_state()
+        calls = []
+        monkeypatch.setattr(sim.coupled, "solve", lambda *a, **k: type("R", (), {"converged": False})())
+        monkeypatch.setattr(sim, "_passes", lambda *a, **k: calls.append(a) or (False, {}))
+        assert carried_state._equilibrium(sim, state, 0.001) is None
+        assert len(calls) == passes_expected, scheme
+
+
 def test_linear_history_is_carried_exactly():
     scene = _plate()
     s = ngtmc.Solver(scene, compile=True)
