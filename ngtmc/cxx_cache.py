@@ -14,7 +14,9 @@ renamed, so that concurrent processes never see half a file).
 
 Where: ``$NGTMC_CXX_CACHE`` if set, else ``$XDG_CACHE_HOME/ngtmc/cxx`` (default
 ``~/.cache/ngtmc/cxx``). ``NGTMC_CXX_CACHE=off`` turns the cache off. Each entry is one object
-file of 1-200 kB and the names of its pointers; delete the folder to empty the cache.
+file of 1-200 kB after a line of the names of its pointers, written at once (a process never
+reads the names of one compilation with the object of another); delete the folder to empty the
+cache.
 
 NGSolve names the pointers of an expression's code with a counter of the process (``_POINTER``),
 so the same expression compiled again within a run has another text: a remeshed run builds a
@@ -75,30 +77,36 @@ with open(real, "rb") as f:
 key.update(os.environ.get("NGTMC_CXX_KEY", "").encode())
 key.update(" ".join(a for a in args if a not in (src, obj)).encode())
 key.update(code)
-entry = os.path.join({objects!r}, key.hexdigest())
+# one file per entry, written at once: the pointer names (a JSON line), then the object file
+entry = os.path.join({objects!r}, key.hexdigest() + ".entry")
 try:
-    with open(entry + ".names") as f:
-        stored = json.load(f)
+    with open(entry, "rb") as f:
+        stored, blob = f.read().split(b"\\n", 1)
+    stored = json.loads(stored)
 except (OSError, ValueError):
     stored = None
-if stored is not None and len(stored) == len(names) and os.path.isfile(entry + ".o"):
+if stored is not None and len(stored) == len(names):
     if stored == names:
-        shutil.copyfile(entry + ".o", obj)
+        with open(obj, "wb") as f:
+            f.write(blob)
         sys.exit(0)
     objcopy = shutil.which("objcopy")
     if objcopy is not None:
         p = {prefix!r}.decode()
         renames = ["--redefine-sym=%s%s=%s%s" % (p, a, p, b) for a, b in zip(stored, names)]
-        if subprocess.call([objcopy] + renames + [entry + ".o", obj]) == 0:
+        with open(obj + ".stored", "wb") as f:
+            f.write(blob)
+        rc = subprocess.call([objcopy] + renames + [obj + ".stored", obj])
+        os.remove(obj + ".stored")
+        if rc == 0:
             sys.exit(0)
 rc = subprocess.call([real] + args)
 if rc == 0:
     try:
-        for ext, write in ((".names", lambda t: open(t, "w").write(json.dumps(names))),
-                           (".o", lambda t: shutil.copyfile(obj, t))):
-            tmp = "%s%s.%d.tmp" % (entry, ext, os.getpid())
-            write(tmp)
-            os.replace(tmp, entry + ext)
+        tmp = "%s.%d.tmp" % (entry, os.getpid())
+        with open(obj, "rb") as f, open(tmp, "wb") as g:
+            g.write(json.dumps(names).encode() + b"\\n" + f.read())
+        os.replace(tmp, entry)
     except OSError:
         pass
 sys.exit(rc)
