@@ -76,8 +76,9 @@ def _equilibrium(sim, state: dict, load: float, u_first: bool = False) -> dict |
     solver at the result.
 
     Why no passes under path following: where the coupled Newton finds no equilibrium at the
-    load, the carried crack is past the new mesh's critical load; passes at a fixed load then grow
-    it off the path, or fail after up to ``max_staggered`` passes (the quick three-point bending's
+    load, the carried crack is past the new mesh's critical load; passes at a fixed load then find
+    an equilibrium the path does not pass through (how far its crack grew was not logged), or fail
+    after up to ``max_staggered`` passes (the quick three-point bending's
     crack run: 8 of 27 equilibrations failed, 10.7 s each against 3.6 s for one that converged);
     :func:`settle` finds the path below the load instead."""
     s = sim.solver
