@@ -8,7 +8,7 @@ them:
 
 * :func:`balance`: u solved at the carried alpha and load;
 * :func:`equilibrate`: the state before the step brought to equilibrium at its load (coupled
-  Newton, else converged staggered passes) and committed;
+  Newton, else, except under path following, converged staggered passes) and committed;
 * where that fails, :func:`consistent`: alpha raised to the phase field of the carried H, u
   balanced at it; and under path following :func:`settle`: the consistent state brought to
   equilibrium at the first of a few loads below its own.
@@ -46,10 +46,10 @@ def balance(solver, state: dict, in_place: bool = False) -> dict:
 
 def equilibrate(sim, state: dict) -> dict:
     """``state`` (carried to a new mesh) brought to equilibrium there at its load, and committed
-    (H may only grow, alpha with it): the coupled Newton, and where it fails the converged
-    staggered passes; where both fail, the state made :func:`consistent` with its history and,
-    under path following, :func:`settle`-d below its load; the state as it is where the scene has
-    no phase field.
+    (H may only grow, alpha with it): :func:`_equilibrium` (the coupled Newton, and except under
+    path following the converged staggered passes); where that fails, the state made
+    :func:`consistent` with its history and, under path following, :func:`settle`-d below its
+    load; the state as it is where the scene has no phase field.
 
     Why: the interpolated fields are not an equilibrium of the new mesh. The phase field that the
     carried history drives on the new mesh differs from the carried alpha, so the state before the
@@ -86,7 +86,7 @@ def _equilibrium(sim, state: dict, load: float, u_first: bool = False) -> dict |
     ok, H_trial = False, None   # None: update_history takes the trial history of the converged u
     if sim.coupled is not None and (not u_first or s.solve_displacement(load).converged):
         ok = sim.coupled.solve(load).converged
-    if not ok and sim._path is not None and sim.coupled is not None:
+    if not ok and sim._path is not None:   # (path following always has the coupled Newton)
         return None
     if not ok:
         s.set_state(state)
@@ -104,8 +104,8 @@ SETTLE_LOADS = (0.98, 0.95, 0.9, 0.8)
 
 def settle(sim, state: dict) -> dict:
     """A :func:`consistent` ``state`` of a path-following run brought to equilibrium at the first
-    load of SETTLE_LOADS (fractions of its own) where one is found: the coupled Newton, else
-    converged staggered passes; committed. Returns the state at that load (its ``load`` lower),
+    load of SETTLE_LOADS (fractions of its own) where one is found: the coupled Newton (no
+    staggered passes under path following, :func:`_equilibrium`); committed. Returns the state at that load (its ``load`` lower),
     or ``state`` where none is found.
 
     Why: where a crack runs in a snap-back, the state carried to a finer mesh is past its own
