@@ -57,6 +57,7 @@ class DesignProblem:
 
     def __init__(self, p: dict, mesh: ngs.Mesh | None = None):
         self.p = p
+        _study().check_parameters(p)
         self.mesh = mesh if mesh is not None else _study().build_mesh(p)
         self.mask = _pad_mask(self.mesh)
         cen, area = _centroids_and_areas(self.mesh)

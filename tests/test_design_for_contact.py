@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+import ngsolve as ngs
 
 from ngtmc import sensitivities as S
 from ngtmc.studies import design_for_contact as D
@@ -41,6 +42,44 @@ def test_filtered_design_gradient_matches_fd():
     print(f"\ndesign gradient: FD {fd:.8e}, adjoint {adj:.8e}, relative difference {abs(fd - adj) / abs(adj):.1e}")
     assert abs(fd - adj) <= 1e-4 * abs(adj)
     assert np.isclose(prob.volume(x), p["initial_fill"])
+
+
+def test_h_crack_refines_by_a_forward_run_and_the_gradient_holds_on_that_mesh():
+    """``--set h_crack``: the beam is meshed without the band and refined during a forward run of
+    the initial design (issue 12: "record the path on the final mesh"); the design problem then
+    lives on that fixed mesh, its pad elements are the design variables, and the adjoint gradient
+    agrees with central differences there."""
+    p = D._params("quick", **OVERRIDES, h_crack=0.15)
+    coarse = D._generated_mesh(p, p["h"])
+    mesh = D.build_mesh(p)
+    assert D.build_mesh(dict(p)) is mesh  # one refining run per parameter set
+    assert mesh.ne > coarse.ne
+    beam = np.array([mesh.GetMaterials()[el.index] == "beam" for el in mesh.Elements(ngs.VOL)])
+    pts = np.asarray(mesh.ngmesh.Coordinates())
+    tri = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    edge = np.linalg.norm(pts[tri] - np.roll(pts[tri], 1, axis=1), axis=2).max(axis=1)
+    centre = pts[tri].mean(axis=1)
+    assert edge[beam].max() > 0.3  # coarse far from the crack ...
+    above_notch = beam & (np.abs(centre[:, 0] - 2.0) < 0.1) & (centre[:, 1] < 0.5)
+    assert above_notch.any() and edge[above_notch].max() <= 0.15 + 1e-9  # ... fine where it ran
+    prob = D.DesignProblem(p)
+    assert prob.mesh is mesh and prob.mask.sum() == D._pad_mask(mesh).sum()
+    x = np.full(int(prob.mask.sum()), p["initial_fill"])
+    W, dW, path = prob.evaluate(x)
+    d = np.random.default_rng(4).uniform(-1, 1, x.size) * p["initial_fill"]
+    eps = 1e-4
+    fd = (S.ExternalWork().value(S.replay(path, rho=prob.rho(x + eps * d)))
+          - S.ExternalWork().value(S.replay(path, rho=prob.rho(x - eps * d)))) / (2 * eps)
+    adj = float(dW @ d)
+    print(f"\nrefined mesh: {coarse.ne} -> {mesh.ne} elements; FD {fd:.8e}, adjoint {adj:.8e}")
+    assert abs(fd - adj) <= 1e-4 * abs(adj)
+
+
+@pytest.mark.parametrize("bad", [-0.1, float("nan"), float("inf")])
+def test_h_crack_must_be_a_size(bad):
+    from ngtmc.study import StudyError
+    with pytest.raises(StudyError, match="h_crack"):
+        D.cases(D._params("quick", h_crack=bad))
 
 
 @pytest.mark.slow
