@@ -407,5 +407,10 @@ if __name__ == "__main__":  # pragma: no cover
     ap.add_argument("--no-report", action="store_true", help="do not render report.html")
     args = ap.parse_args()
     given = parse_overrides(args.overrides)
-    _, values = study_parameters(sys.modules[__name__], args.resolution, given)  # typed, or StudyError
+    from ngtmc.study import StudyError
+    try:
+        _, values = study_parameters(sys.modules[__name__], args.resolution, given)  # typed, or StudyError
+        check_parameters(values)
+    except StudyError as e:
+        ap.error(str(e))
     print(run(args.out_dir, args.resolution, {k: values[k] for k in given}, report=not args.no_report))
