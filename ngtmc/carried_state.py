@@ -8,10 +8,10 @@ them:
 
 * :func:`balance`: u solved at the carried alpha and load;
 * :func:`equilibrate`: the state before the step brought to equilibrium at its load (coupled
-  Newton, else converged staggered passes) and committed; under path following not tried;
-* where that fails, and always under path following, :func:`consistent`: alpha raised to the
-  phase field of the carried H, u balanced at it; and under path following :func:`settle`: the
-  consistent state brought to equilibrium at the first of a few loads below its own.
+  Newton, else, except under path following, converged staggered passes) and committed;
+* where that fails, :func:`consistent`: alpha raised to the phase field of the carried H, u
+  balanced at it; and under path following :func:`settle`: the consistent state brought to
+  equilibrium at the first of a few loads below its own.
 
 Measured on the quick three-point bending's crack run (docs/adaptivity.md, "Refinement by
 remeshing"). Units: mm, N; D per mm of thickness in 2D.
@@ -45,29 +45,22 @@ def balance(solver, state: dict, in_place: bool = False) -> dict:
 
 
 def equilibrate(sim, state: dict) -> dict:
-    """``state`` (carried to a new mesh) brought to equilibrium there, and committed (H may only
-    grow, alpha with it). Under path following: made :func:`consistent` with its history and
-    :func:`settle`-d below its load. Otherwise: :func:`_equilibrium` at its load (the coupled
-    Newton, then converged staggered passes), and where that fails the consistent state. The
-    state as it is where the scene has no phase field.
+    """``state`` (carried to a new mesh) brought to equilibrium there at its load, and committed
+    (H may only grow, alpha with it): :func:`_equilibrium` (the coupled Newton, and except under
+    path following the converged staggered passes); where that fails, the state made
+    :func:`consistent` with its history and, under path following, :func:`settle`-d below its
+    load; the state as it is where the scene has no phase field.
 
     Why: the interpolated fields are not an equilibrium of the new mesh. The phase field that the
     carried history drives on the new mesh differs from the carried alpha, so the state before the
     step already holds a dissipation of its own: a path-following re-solve of a smaller dissipation
     has no solution, and its load runs off (the sheared plate) or its Newton stalls at every
-    dissipation step down to 1/128 of the base (the quick three-point bending's fourth remesh).
-
-    Why no equilibrium at the load under path following: where the crack runs, the carried state
-    is past the new mesh's critical load and the coupled Newton finds none there. In the quick
-    three-point bending it failed at 16 of 18 remeshes (64.9 s of a 506 s run), and in the paper
-    resolution's at 18 of 26 (140 s). Going to the settle at once gave the same run at quick (the
-    same steps, Newton iterations, forces and crack; 462 against 506 s side by side,
-    docs/adaptivity.md, "Settling at once")."""
+    dissipation step down to 1/128 of the base (the quick three-point bending's fourth remesh)."""
     s = sim.solver
     if s.alpha is None:
         return state
     current = s.get_state()
-    out = None if sim._path is not None else _equilibrium(sim, state, float(state["load"]))
+    out = _equilibrium(sim, state, float(state["load"]))
     if out is None:
         out = consistent(s, state)
         if sim._path is not None:
