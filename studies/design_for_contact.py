@@ -189,11 +189,15 @@ def refined_mesh(p: dict) -> ngs.Mesh:
         sc.density = rho
         sim = ngtmc.Simulation(sc, schedule(p), control(p), newton=newton_options(),
                                adapt=ngtmc.Adaptivity(h_crack=h_crack))
+        print(f"[ngtmc design_for_contact] refining the mesh ({mesh.ne} elements) to h_crack = {h_crack:g} mm by a "
+              "forward run of the initial design", file=sys.stderr, flush=True)
         try:
             sim.run()
         except ngtmc.StepFailure as e:
             raise RuntimeError(f"the refining run of the initial design (h_crack = {h_crack:g} mm) failed: {e}") from e
         _REFINED[key] = sim.solver.mesh
+        print(f"[ngtmc design_for_contact] refined mesh: {sim.solver.mesh.ne} elements, {len(sim.refinements)} "
+              f"refinements, {sim._elapsed():.0f} s", file=sys.stderr, flush=True)
     return _REFINED[key]
 
 
