@@ -83,11 +83,7 @@ class Adaptivity:
     mm (None: no refinement of the void). J_threshold: J below which a void element is refined
     (in (0, 1)). buffer: layers of neighbours refined with a marked element (>= 0). buffer_length:
     elements whose centroid is within this distance (mm, >= 0) of a marked element's are refined
-    too (0: none; a lookahead ahead of the crack tip). lead_length: with buffer_length, the zone
-    within buffer_length of the crack's front (its marked elements still to refine) is swept this
-    far (mm, >= 0) along the direction the crack advances (from the nearby crack already refined
-    to its front; none before any of it is refined): a lookahead ahead of the tip, not around the
-    whole crack. max_rounds:
+    too (0: none; a lookahead ahead of the crack tip). max_rounds:
     refinement rounds (each followed by a re-solve) after one step at most (>= 1).
     size_tolerance: an element is refined while its longest edge exceeds size_tolerance times its
     target (>= 1). NGSolve's refinement halves an element's size (its first level of a Netgen
@@ -115,7 +111,6 @@ class Adaptivity:
     buffer: int = 1
     max_rounds: int = 10
     buffer_length: float = 0.0
-    lead_length: float = 0.0
     size_tolerance: float = 1.0
     remesh_maxh: float | None = None
     history_transfer: str = "max"
@@ -139,12 +134,6 @@ class Adaptivity:
         check_number("Adaptivity buffer_length", self.buffer_length, "mm")
         if not (math.isfinite(self.buffer_length) and self.buffer_length >= 0):
             raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r} mm must be finite and >= 0")
-        check_number("Adaptivity lead_length", self.lead_length, "mm")
-        if not (math.isfinite(self.lead_length) and self.lead_length >= 0):
-            raise ValueError(f"Adaptivity lead_length = {self.lead_length!r} mm must be finite and >= 0")
-        if self.lead_length > 0 and not self.buffer_length > 0:
-            raise ValueError(f"Adaptivity lead_length = {self.lead_length!r} mm needs a buffer_length > 0 (the "
-                             "width of the zone swept ahead of the crack)")
         check_number("Adaptivity size_tolerance", self.size_tolerance, "-")
         if not (math.isfinite(self.size_tolerance) and self.size_tolerance >= 1.0):
             raise ValueError(f"Adaptivity size_tolerance = {self.size_tolerance!r} must be finite and >= 1")
@@ -299,10 +288,7 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, remesher=None) 
     if adapt.buffer_length > 0 and (flags & coarse).any():
         # hysteresis: only when the indicator reaches an element still to refine is the zone within
         # buffer_length refined too; the crack then runs about that far before the next refinement
-        zone = _within(mesh, flags, adapt.buffer_length)
-        if adapt.lead_length > 0:
-            zone |= _ahead(mesh, flags & frac, coarse, adapt.lead_length, adapt.buffer_length)
-        flags = zone
+        flags = _within(mesh, flags, adapt.buffer_length)
     return flags & coarse
 
 
@@ -313,31 +299,6 @@ def _within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:
     c = _centroids(mesh)
     d, _ = cKDTree(c[flags]).query(c, distance_upper_bound=distance)
     return flags | np.isfinite(d)
-
-
-def _ahead(mesh, crack: np.ndarray, coarse: np.ndarray, lead: float, width: float) -> np.ndarray:
-    """Elements within ``width`` (mm) of the crack's front (``crack & coarse``: the marked
-    elements still to refine) moved by up to ``lead`` (mm) along the direction the crack advances:
-    from the centroid of the refined crack elements within 2 ``lead`` of the front's centroid (all
-    refined crack elements where none is that near) to the front's centroid. None where the crack
-    has no refined element yet (its first refinement) or no front."""
-    from scipy.spatial import cKDTree
-    c = _centroids(mesh)
-    front, done = crack & coarse, crack & ~coarse
-    out = np.zeros(mesh.ne, dtype=bool)
-    if not front.any() or not done.any():
-        return out
-    cf = c[front].mean(axis=0)
-    near = done & (np.linalg.norm(c - cf, axis=1) <= 2.0 * lead)
-    d = cf - c[near if near.any() else done].mean(axis=0)
-    n = float(np.linalg.norm(d))
-    if not n > 0:
-        return out
-    tree = cKDTree(c[front])
-    for s in np.arange(1, int(math.ceil(2.0 * lead / width)) + 1) * (0.5 * width):
-        dist, _ = tree.query(c - min(s, lead) * d / n, distance_upper_bound=width)
-        out |= np.isfinite(dist)
-    return out
 
 
 def _ancestors(mesh, ne_old: int) -> np.ndarray:

@@ -49,9 +49,6 @@ SOLVER_PARAMETERS = {
     "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
                                  "too (Adaptivity.buffer_length), so that a running crack tip stays on the fine mesh "
                                  "for several steps"),
-    "amr_lead": (0.0, "mm", "with h_crack and amr_lookahead: the zone within amr_lookahead of the crack's front is "
-                            "swept this far ahead along the direction the crack advances (Adaptivity.lead_length); "
-                            "0: none"),
     "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
                               "Adaptivity.h_void); 0: the void is not refined"),
     "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
@@ -72,13 +69,13 @@ _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 #: values then: they are left out of the parameter hashes and of the comparison of a resumed run
 #: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
 #: resume and compare.
-INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_lead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
+INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
                             "amr_remesh_maxh": 0.0, "amr_history_fraction": 1.0}
 
 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
 #: hashes and comparisons at that value, so that the runs still resume and compare.
-ADDED_AT_DEFAULT = {"amr_lead": 0.0, "amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
+ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
                     "amr_history_fraction": 1.0}
 
 
@@ -130,7 +127,6 @@ def simulation_options(p: dict) -> dict:
             h_void = float(p.get("amr_h_void", 0.0))
             maxh = float(p.get("amr_remesh_maxh", 0.0))
             out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
-                                      lead_length=float(p.get("amr_lead", 0.0)),
                                       h_void=h_void if h_void > 0 else None,
                                       size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
                                       history_fraction=float(p.get("amr_history_fraction", 1.0)),

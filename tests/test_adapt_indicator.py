@@ -61,32 +61,3 @@ def test_size_tolerance_refines_while_the_longest_edge_exceeds_it_times_the_targ
     assert indicated.any() and s.h[indicated].max() <= 0.03 * 2 ** 0.5 * (1 + 1e-9)
     with pytest.raises(ValueError, match="size_tolerance"):
         Adaptivity(h_crack=0.01, size_tolerance=0.9)
-
-
-def test_lead_sweeps_the_front_ahead_along_the_crack_not_behind_it():
-    """Adaptivity.lead_length: the zone within buffer_length of the crack's front (the marked
-    crack elements still to refine) swept up to lead_length along the direction from the nearby
-    refined crack to the front. A straight crack along +x, refined up to x = 0.4 mm, front at 0.4
-    to 0.5 mm: the swept zone reaches about x = 0.5 + lead, stays within the width of the crack's
-    line, and does not extend behind the front; without refined crack elements there is no
-    direction and nothing is swept."""
-    import ngsolve as ngs
-    from netgen.geom2d import unit_square
-
-    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.02))
-    c = _centroids(mesh)
-    crack = (np.abs(c[:, 1] - 0.5) < 0.03) & (c[:, 0] < 0.5)
-    coarse = c[:, 0] > 0.4
-    lead, width = 0.2, 0.05
-    zone = adapt._ahead(mesh, crack, coarse, lead, width)
-    assert zone.any()
-    front_x = c[crack & coarse, 0]
-    assert c[zone, 0].min() >= front_x.min() - width - 1e-9            # nothing behind the front
-    assert c[zone, 0].max() <= front_x.max() + lead + width + 1e-9     # at most lead ahead
-    assert c[zone, 0].max() >= front_x.max() + lead - 0.02             # ... and that far
-    assert np.abs(c[zone, 1] - 0.5).max() <= 0.03 + width + 1e-9       # the crack's line, widened
-    assert not adapt._ahead(mesh, crack, np.ones(mesh.ne, dtype=bool), lead, width).any()
-    with pytest.raises(ValueError, match="lead_length"):
-        Adaptivity(h_crack=0.01, lead_length=0.1)                      # needs a buffer_length
-    with pytest.raises(ValueError, match="lead_length"):
-        Adaptivity(h_crack=0.01, buffer_length=0.05, lead_length=-1.0)
