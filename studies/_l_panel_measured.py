@@ -172,6 +172,17 @@ MEASURED = {
         "force_at_turning_point": 6936, "wf_at_turning_point": 3276.1, "dissipated_at_turning_point": 1638.1,
         "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2663, "reload_peak_force": 8679,
         "reload_peak_load": 6.4911, "final_force": 8150, "final_wf": 8797.5},
+    "medium_path_following_segment_2026_12_04": {
+        "note": "ngtmc run l-panel -r medium --set scheme=path-following --set load_cases=cyclic --set "
+                "load_introduction=segment (no indenter, no void: the schedule minus the 6 mm gap, 0 -> 0.3 -> 0 -> "
+                "1.0 mm, imposed on the arm's lower face from x = 470 to 500 mm; loads below are those, add 6 mm "
+                "to compare), one thread beside another job; stopped at 0.8929 mm (a step cut back for 8 minutes)",
+        "elements": 27089, "ndof_u": 27288, "ndof_alpha": 13644,
+        "steps": 248, "newton_iterations": 1233, "cutbacks": 20, "wall_time_s": 2217,
+        "first_loading_peak_force": 17077, "first_loading_peak_load": 0.2779,
+        "force_at_turning_point": 8042, "dissipated_at_turning_point": 1372.1, "unload_wf_growth": 0.1,
+        "force_unloaded_at_gap": 0.0, "reload_peak_force": 9599, "reload_peak_load": 0.808,
+        "dissipated_at_reload_peak": 3270.6, "force_at_stop": 9451, "load_at_stop": 0.8929},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,

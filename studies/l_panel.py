@@ -249,11 +249,23 @@ Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
   a first-loading peak of 16.84 kN (-0.04 %), 6.94 kN at the turning point, 1638 N mm dissipated
   there (+0.5 %) and a **reload peak of 8.679 kN at 6.491 mm, the same as with the J-based
   vol-dev split to four digits** (8.679 kN at 6.492 mm); 298 steps, 1243 Newton iterations, 1911 s.
+* **The load introduction moves it, upward** (measured 2026-12-04,
+  ``MEASURED["medium_path_following_segment_2026_12_04"]``): the same medium run with ``--set
+  load_introduction=segment`` (no indenter, no void; the schedule minus the 6 mm gap imposed on
+  the arm's lower face over its last 30 mm; loads below plus 6 mm): first-loading peak 17.08 kN
+  at 6.278 mm (+1.4 % against the indenter's 16.84 kN), 8.04 kN at the turning point (indenter:
+  6.94 kN) with 1372 N mm dissipated (1629 N mm: a shorter crack). On reloading the crack grows
+  again from the turning point on, at a slowly rising force: its largest force is **9.60 kN at
+  6.808 mm, +10.6 % against the indenter's 8.68 kN** (+26 % against 7.6 kN); the run was stopped
+  at 6.893 mm (9.45 kN, a step cut back for minutes). So the indenter and the void lower the
+  reload peak by about 10 % against a held segment; whether another indenter (its radius, 20 mm,
+  is our choice: the paper's figure is missing) lowers it further was not measured.
 * At the paper's resolution the reload peak is 28.6 % above the force at the turning point (8.83
   against 6.87 kN; 25.0 % at medium with the same schedule; at quick and medium with the turning
   point at 6.6 mm, 5.1 % and 0.3 %): there the crack had arrested by 6.3 mm and restarts at
   6.49-6.64 mm, where at 6.6 mm it was still running. So what is left of the +16 % is neither the
-  scheme nor the mesh.
+  scheme, the mesh nor the split, and loading the arm without the indenter raises the reload
+  peak rather than lowering it.
   A longer crack at the turning point would lower that restart force; what sets its length in the
   paper's run is not in its text. The report shows these reload peaks in
   its figure "Reload peak of the cracked panel".
