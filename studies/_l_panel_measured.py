@@ -183,6 +183,15 @@ MEASURED = {
         "force_at_turning_point": 8042, "dissipated_at_turning_point": 1372.1, "unload_wf_growth": 0.1,
         "force_unloaded_at_gap": 0.0, "reload_peak_force": 9599, "reload_peak_load": 0.808,
         "dissipated_at_reload_peak": 3270.6, "force_at_stop": 9451, "load_at_stop": 0.8929},
+    "medium_path_following_indenter_r10_2026_12_04": {
+        "note": "the run of medium_path_following_paper_schedule_2026_12_03 with --set indenter_radius=10 (our 20 mm "
+                "halved), one thread beside other jobs (paused for 18 minutes)",
+        "elements": 27579, "ndof_u": 27788, "ndof_alpha": 13894,
+        "steps": 304, "newton_iterations": 1304, "cutbacks": 17, "wall_time_s": 3007,
+        "first_loading_peak_force": 16834, "first_loading_peak_load": 6.2643,
+        "force_at_turning_point": 6911, "wf_at_turning_point": 3271.6, "dissipated_at_turning_point": 1635.8,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2343, "reload_peak_force": 8662,
+        "reload_peak_load": 6.4894, "final_force": 7980, "final_wf": 8850.9},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
