@@ -184,8 +184,7 @@ def test_reload_peak_record():
     does the mesh: with the paper's schedule medium and the paper's resolution agree; nor does the
     split (spectral against J-based vol-dev at medium), nor the load introduction (a held segment
     without indenter and void reloads higher; half the indenter's radius reloads the same); at
-    the paper's resolution the reload peak lies
-    16.2 % above 7.6 kN."""
+    the paper's resolution the reload peak lies 16.2 % above 7.6 kN."""
     turn = S.MEASURED["quick_turn_past_the_peak_2026_12_03"]
     pf, sp = turn["path_following"], turn["single_pass"]
     assert pf["unload_wf_growth"] == 0.0 and sp["unload_wf_growth"] > 0.4 * sp["wf_at_turning_point"]
