@@ -339,7 +339,7 @@ class DissipationPath:
 
     def predictor_states(self) -> list[dict]:
         """The accepted state before the last one, (u, alpha), for the secant predictor, as a
-        partial state that :func:`ngtmc.adapt.refine` transfers to a refined mesh ([] if none)."""
+        partial state that :func:`ngtmc.bisection.refine` transfers to a refined mesh ([] if none)."""
         if self.x_prev is None:
             return []
         return [{"u": self.x_prev[0], "alpha": self.x_prev[1]}]

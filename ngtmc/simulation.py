@@ -296,12 +296,13 @@ class Simulation(RunRecords, RunState, StepSchemes):
         predictor; repeat until nothing is marked (at most ``max_rounds`` times). Returns (ok,
         info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
         cuts the step back as for any failed step."""
-        from . import adapt as amr
+        from .adapt import mark
+        from .bisection import refine
         from .remesh import remesh_step
         rm = self._remesher
         for _ in range(self.adapt.max_rounds):
             s = self.solver
-            marked = amr.mark(s, self.adapt, info.get("H_trial"), remesher=rm)
+            marked = mark(s, self.adapt, info.get("H_trial"), remesher=rm)
             if not marked.any():
                 break
             previous = self._path.predictor_states() if self._path is not None else []
@@ -309,7 +310,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
                 record, (saved, *previous) = remesh_step(self, marked, [saved, *previous])
                 s = self.solver
             else:
-                record, (saved, *previous) = amr.refine(s, marked, [saved, *previous])
+                record, (saved, *previous) = refine(s, marked, [saved, *previous])
                 if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
                     self.coupled.mesh_changed()
             self.refinements.append((self.step + 1, record))

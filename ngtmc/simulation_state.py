@@ -24,7 +24,7 @@ class RunState:
         if self._path is not None:
             st["path"] = self._path.get_state()
             arrays.update(self._path.get_arrays())
-        if self.refinements:  # the mesh of the state: the initial one refined as recorded (adapt.replay)
+        if self.refinements:  # the mesh of the state: the initial one refined as recorded (bisection.replay)
             st["refinements"] = [{"step": step, **rec.as_dict()} for step, rec in self.refinements]
             arrays["refined_elements"] = np.concatenate([rec.elements for _, rec in self.refinements])
             if self._remesher is not None:   # the mesh is the geometry meshed with these restrictions
@@ -36,7 +36,7 @@ class RunState:
     def set_state(self, st: dict):
         """Resume from a state of :meth:`get_state`. The state of a run whose mesh was refined
         (``refinements``) is set on this simulation's mesh refined in the same way
-        (:func:`ngtmc.adapt.replay`), which must then be the run's initial mesh or a mesh of the
+        (:func:`ngtmc.bisection.replay`), which must then be the run's initial mesh or a mesh of the
         same run refined fewer times."""
         self._replay_refinements(st)
         self.solver.set_state(st["solver"])
@@ -56,7 +56,7 @@ class RunState:
 
     def _replay_refinements(self, st: dict):
         """Bring the mesh to the one of state ``st``: refine it by the refinements that ``st``
-        records beyond those this simulation has done (:func:`ngtmc.adapt.replay`)."""
+        records beyond those this simulation has done (:func:`ngtmc.bisection.replay`)."""
         recorded = list(st.get("refinements") or [])
         if len(recorded) == len(self.refinements):
             return
@@ -67,7 +67,8 @@ class RunState:
             raise ValueError(f"this state is on a mesh refined {len(recorded)} times, this simulation's mesh has been "
                              f"refined {len(self.refinements)} times: a mesh is not coarsened; set the state on a new "
                              "Simulation of the same scene")
-        from .adapt import RefinementRecord, replay
+        from .adapt import RefinementRecord
+        from .bisection import replay
         flat = np.asarray((st.get("arrays") or {}).get("refined_elements", np.zeros(0)), dtype=np.int64)
         counts = [int(r["marked"]) for r in recorded]
         if flat.size != sum(counts):

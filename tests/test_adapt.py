@@ -244,7 +244,7 @@ def test_forms_keep_one_matrix_through_refinements():
 
 
 def test_exact_prolongation_needs_a_space_made_on_the_first_level():
-    """The NGSolve trap behind adapt._carrier_space: a space with hoprolongation=True prolongates an
+    """The NGSolve trap behind bisection._carrier_space: a space with hoprolongation=True prolongates an
     order-2 field exactly only if it was made before the mesh's first refinement."""
     face = Rectangle(1.0, 1.0).Face()
     field = ngs.CF((ngs.x * ngs.y + ngs.x ** 2, ngs.y ** 2 - ngs.x * ngs.y))

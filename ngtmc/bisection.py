@@ -1,0 +1,202 @@
+"""Refinement by NGSolve's bisection during a run, with the exact transfer of the state to the refined mesh.
+
+:func:`refine` bisects the elements that :func:`ngtmc.adapt.mark` marked (``mesh.SetRefinementFlag``,
+``mesh.Refine()``), brings the solver to the new mesh (:meth:`~ngtmc.solver.Solver.mesh_changed`)
+and carries its state over:
+
+* u: exactly. NGSolve's prolongation of a space with per-node orders is not exact for order 2
+  (only the vertex part is; 0.026 error on a quadratic field, measured), so u is carried through
+  a uniform-order space with ``hoprolongation=True`` (exact on triangles) and set back;
+* alpha (P1) by NGSolve's prolongation, exact: a bisection puts the new vertex at an edge midpoint
+  where the P1 field is the mean of the edge's ends (on a curved boundary the new vertex is moved
+  onto the geometry and keeps that value);
+* the history H without loss: an element that was not refined keeps its values; every child of a
+  refined element takes, at each of its points, the largest value of its parent's points. Damage
+  never heals through a transfer (the value at a child's point is at least the parent's value at
+  any of the parent's points, so at least any field interpolated from them within the parent's
+  range); a homogeneous H stays exactly as it is;
+* the pseudo-density: an element given per element (array) follows its parent; a density given
+  per region follows the region names, which children keep.
+
+Curved geometry stays curved: the mesh is curved again at its order after each refinement.
+
+A run is resumed on its refined mesh by :func:`replay`: the elements marked in each refinement
+are recorded (:class:`~ngtmc.adapt.RefinementRecord`), and NGSolve's bisection of the same marks
+on the same initial mesh gives the same mesh and dof numbering again.
+
+The settings and the marking are in :mod:`ngtmc.adapt` (which re-exports :func:`refine`,
+:func:`replay` and :func:`transfer_history`).
+
+Units: mm.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import ngsolve as ngs
+
+from .adapt import RefinementRecord, _per_element
+
+__all__ = ["refine", "replay", "transfer_history"]
+
+
+def _ancestors(mesh, ne_old: int) -> np.ndarray:
+    """For every element of the refined mesh, the element of the mesh before the refinement that
+    contains it. A refined element keeps its number for one child; the others are appended, each
+    with a parent (possibly itself appended in the same refinement)."""
+    ne = mesh.ne
+    anc = np.arange(ne)
+    parent = np.array([mesh.GetParentElement(ngs.ElementId(ngs.VOL, i)).nr for i in range(ne_old, ne)], dtype=np.int64)
+    anc[ne_old:] = parent
+    for _ in range(64):
+        deep = anc[ne_old:] >= ne_old
+        if not deep.any():
+            return anc
+        anc[ne_old:][deep] = anc[anc[ne_old:][deep]]
+    raise RuntimeError("the parent chain of a refinement did not end in an element of the previous mesh")
+
+
+def transfer_history(H_old: np.ndarray, ancestors: np.ndarray, ne_old: int, npts_new: int) -> np.ndarray:
+    """The history on the refined mesh without loss: an element not refined keeps its values, every
+    child of a refined element gets the largest value of its parent's points at all its points."""
+    Hp = _per_element(np.asarray(H_old, dtype=float), ne_old)
+    if Hp.shape[1] != npts_new:
+        raise RuntimeError("the history rule changed its number of points in a refinement")
+    refined = np.zeros(ne_old, dtype=bool)
+    refined[ancestors[ne_old:]] = True
+    out = np.empty((ancestors.size, npts_new))
+    out[:ne_old] = Hp
+    out[:ne_old][refined] = Hp[refined].max(axis=1, keepdims=True)
+    out[ne_old:] = Hp[ancestors[ne_old:]].max(axis=1, keepdims=True)
+    return out.ravel()
+
+
+def _carrier_space(solver):
+    """The uniform-order space through which u is carried to a refined mesh, made once per solver
+    on the mesh's first level and kept: an ``hoprolongation`` space prolongates exactly only if
+    it has existed since the first level of the mesh (one made on an already refined mesh gave an
+    error of 0.086 on a quadratic field, silently; tests/test_adapt.py)."""
+    aux = getattr(solver, "_adapt_carrier", None)
+    if aux is None:
+        if solver.mesh.levels != 1:
+            raise ValueError("adaptive refinement needs a mesh that has not been refined by NGSolve before the run "
+                             f"(this one has {solver.mesh.levels} levels): start from adapt.private_scene(scene), "
+                             "which works on a copy of the mesh")
+        p = solver.order
+        aux = ngs.VectorH1(solver.mesh, order=p, hoprolongation=p >= 2)
+        solver._adapt_carrier = aux
+    return aux
+
+
+def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, list]:
+    """Refine the marked elements of the solver's mesh and carry the solver's state over.
+
+    The solver's fields (u, alpha, committed alpha and history) are transferred in place (see the
+    module docstring); ``states``: further states of :meth:`~ngtmc.solver.Solver.get_state` (for
+    example the one before the step) to transfer, returned as new dicts in the same order; a state
+    may hold only some of the fields (``u`` at least; ``alpha``, ``alpha_committed``, ``H``,
+    ``load``), for example a predictor's (u, alpha). Returns (record, transferred states)."""
+    mesh = solver.mesh
+    ne_old = mesh.ne
+    dofs_old = solver.fes_u.ndof
+    marked = np.asarray(marked, dtype=bool)
+    if marked.shape != (ne_old,):
+        raise ValueError(f"marked has shape {marked.shape}; the mesh has {ne_old} elements")
+    aux = _carrier_space(solver)
+    tmp_u = ngs.GridFunction(solver.fes_u)
+
+    def carry_u(values):
+        tmp_u.vec.FV().NumPy()[:] = values
+        g = ngs.GridFunction(aux)
+        g.Set(tmp_u)
+        return g
+
+    u_carriers = [carry_u(solver.u.vec.FV().NumPy())] + [carry_u(st["u"]) for st in states]
+    del tmp_u
+    a_carriers = {}
+    if solver.alpha is not None:
+        def carry_a(values):
+            g = ngs.GridFunction(solver.fes_a)
+            g.vec.FV().NumPy()[:] = values
+            return g
+        a_carriers[-1, "alpha_committed"] = carry_a(solver.alpha_committed)
+        for k, st in enumerate(states):
+            for key in ("alpha", "alpha_committed"):
+                if key in st:
+                    a_carriers[k, key] = carry_a(st[key])
+    H_old = [solver.H_committed] + [st["H"] for st in states if "H" in st]
+
+    anc = _refine_mesh(solver, marked)
+
+    npts = solver.irs.ndof // mesh.ne
+    new_H = [transfer_history(h, anc, ne_old, npts) for h in H_old]
+
+    def back_u(g):
+        t = ngs.GridFunction(solver.fes_u)
+        t.Set(g)
+        return t.vec.FV().NumPy().copy()
+
+    new_u = [back_u(g) for g in u_carriers]
+    solver.u.vec.FV().NumPy()[:] = new_u[0]
+    solver.H_committed = new_H[0]
+    solver.H.vec.FV().NumPy()[:] = new_H[0]
+    out = []
+    if solver.alpha is not None:
+        solver.alpha_committed = a_carriers[-1, "alpha_committed"].vec.FV().NumPy().copy()
+    H_next = iter(new_H[1:])
+    for k, st in enumerate(states):
+        new = {"u": new_u[k + 1]}
+        if "H" in st:
+            new["H"] = next(H_next)
+        if "load" in st:
+            new["load"] = np.array(st["load"])
+        for key in ("alpha", "alpha_committed"):
+            if (k, key) in a_carriers:
+                new[key] = a_carriers[k, key].vec.FV().NumPy().copy()
+        out.append(new)
+    record = RefinementRecord(int(marked.sum()), ne_old, mesh.ne, dofs_old, solver.fes_u.ndof,
+                              np.flatnonzero(marked).astype(np.int64))
+    return record, out
+
+
+def _refine_mesh(solver, marked: np.ndarray) -> np.ndarray:
+    """Bisect the marked elements of the solver's mesh (NGSolve), curve it again at its order, let
+    a density given per element follow the parents, and bring the solver to the new mesh
+    (:meth:`~ngtmc.solver.Solver.mesh_changed`). Returns the ancestor of every new element in the
+    mesh before (:func:`_ancestors`). The one place where a run's mesh is refined."""
+    mesh = solver.mesh
+    ne_old = mesh.ne
+    scene = solver.scene
+    per_element_density = scene.density is not None and not isinstance(scene.density, Mapping)
+    rho_old = solver.rho.vec.FV().NumPy().copy()
+    curve = mesh.GetCurveOrder()
+    for el in mesh.Elements(ngs.VOL):
+        mesh.SetRefinementFlag(el, bool(marked[el.nr]))
+    mesh.Refine()
+    if curve > 1:
+        mesh.Curve(curve)
+    anc = _ancestors(mesh, ne_old)
+    if per_element_density:
+        scene.density = rho_old[anc]
+    solver.mesh_changed()
+    return anc
+
+
+def replay(solver, elements: list) -> None:
+    """Refine the solver's mesh as a run did: ``elements[k]`` are the numbers of the elements
+    marked in its k-th refinement (:attr:`RefinementRecord.elements`). The mesh must be the run's
+    initial one (a fresh solver of the same scene); NGSolve's bisection is deterministic, so the
+    mesh, its element numbers and the dof numbering come out as in the run, and a state of the run
+    (:meth:`~ngtmc.solver.Solver.get_state`) fits. Field values are not transferred: the caller
+    sets the state afterwards. Raises ValueError when the marks do not fit the mesh."""
+    _carrier_space(solver)   # made on the first level, as in the run, for the refinements to come
+    for k, idx in enumerate(elements):
+        idx = np.asarray(idx, dtype=np.int64)
+        ne = solver.mesh.ne
+        if idx.size and (idx.min() < 0 or idx.max() >= ne):
+            raise ValueError(f"refinement {k + 1} of the recorded run marks element {int(idx.max())}, but the mesh "
+                             f"has {ne} elements: the recorded refinements do not belong to this mesh")
+        marked = np.zeros(ne, dtype=bool)
+        marked[idx] = True
+        _refine_mesh(solver, marked)
