@@ -5,6 +5,8 @@ wall times in s."""
 
 #: Measured with ngtmc.run_study on a shared, heavily loaded 2-core machine (wall times inflated).
 #: Forces in N for the whole 100 mm panel; W_f (fracture_energy) in N mm for the whole panel.
+#: ``crack_x_at_turning_point``: the smallest x (mm) with alpha > 0.9 in the snapshot at the turning point
+#: (6.3 mm): the crack runs from the corner (x = 250 mm) to the left; the band ends at x = 150 mm.
 MEASURED = {
     "quick": {"elements": 8516, "ndof_u": 8680, "ndof_alpha": 4340, "steps": 291, "newton_iterations": 660,
               "cutbacks": 4, "wall_time_s": 552, "first_loading_force_at_6.3": 17936,
@@ -187,11 +189,31 @@ MEASURED = {
         "note": "the run of medium_path_following_paper_schedule_2026_12_03 with --set indenter_radius=10 (our 20 mm "
                 "halved), one thread beside other jobs (paused for 18 minutes)",
         "elements": 27579, "ndof_u": 27788, "ndof_alpha": 13894,
-        "steps": 304, "newton_iterations": 1304, "cutbacks": 17, "wall_time_s": 3007,
+        "steps": 304, "newton_iterations": 1304, "cutbacks": 17, "wall_time_s": 3007, "crack_x_at_turning_point": 149.1,
         "first_loading_peak_force": 16834, "first_loading_peak_load": 6.2643,
         "force_at_turning_point": 6911, "wf_at_turning_point": 3271.6, "dissipated_at_turning_point": 1635.8,
         "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2343, "reload_peak_force": 8662,
         "reload_peak_load": 6.4894, "final_force": 7980, "final_wf": 8850.9},
+    "medium_path_following_l0_2.375_2026_12_05": {
+        "note": "the run of medium_path_following_paper_schedule_2026_12_03 with --set l0=2.375 (twice the study's "
+                "1.1875 mm; the paper's l0 is not legible in its text), one thread beside a second run and other jobs",
+        "l0": 2.375, "elements": 27986, "ndof_u": 28204, "ndof_alpha": 14102,
+        "steps": 245, "newton_iterations": 1047, "cutbacks": 12, "wall_time_s": 3567,
+        "first_loading_peak_force": 15267, "first_loading_peak_load": 6.2480,
+        "force_at_turning_point": 6252, "wf_at_turning_point": 2968.8, "dissipated_at_turning_point": 1484.4,
+        "crack_x_at_turning_point": 143.1,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2508, "reload_peak_force": 6405,
+        "reload_peak_load": 6.3622, "final_force": 4241, "final_wf": 8643.9},
+    "medium_path_following_l0_4.75_2026_12_05": {
+        "note": "the same with --set l0=4.75 (4 x 1.1875 mm): on reloading the crack grows again at the turning "
+                "point's force, and by 7 mm it has cut the panel (alpha > 0.9 from x = 0 to 250 mm)",
+        "l0": 4.75, "elements": 27986, "ndof_u": 28204, "ndof_alpha": 14102,
+        "steps": 223, "newton_iterations": 1073, "cutbacks": 15, "wall_time_s": 3688,
+        "first_loading_peak_force": 13756, "first_loading_peak_load": 6.2283,
+        "force_at_turning_point": 5089, "wf_at_turning_point": 3028.3, "dissipated_at_turning_point": 1514.2,
+        "crack_x_at_turning_point": 133.6,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2221, "reload_peak_force": 5070,
+        "reload_peak_load": 6.3040, "final_force": 91, "final_wf": 10575.8},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,
