@@ -285,9 +285,10 @@ Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
   sensitivity, not a fit: the study keeps l0 = 1.1875 mm. 245 and 223 steps, 1047 and 1073 Newton
   iterations, 3567 and 3688 s (two runs side by side). Not measured: at the turning point every
   crack ends near the band's left end (x = 150 mm), so on reloading it restarts where the band's
-  elements give way to the coarser panel mesh, whose larger effective toughness Gc (1 + h/(2 l0))
-  would raise the restart force; a wider band, or refinement that follows the crack
-  (``--set h_crack``), would show how much.
+  elements give way to the coarser panel mesh (medium, 250 < y < 290 mm: longest edges 1.0 mm on
+  average at x = 150-170 mm, 2.4 mm at 140-150 mm, 8.6 mm at 120-140 mm), whose larger effective
+  toughness Gc (1 + h/(2 l0)) would raise the restart force; a wider band, or refinement that
+  follows the crack (``--set h_crack``), would show how much.
 * At the paper's resolution the reload peak is 28.6 % above the force at the turning point (8.83
   against 6.87 kN; 25.0 % at medium with the same schedule; at quick and medium with the turning
   point at 6.6 mm, 5.1 % and 0.3 %): there the crack had arrested by 6.3 mm and restarts at
