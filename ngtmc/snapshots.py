@@ -76,6 +76,13 @@ class Snapshots:
         self.meshes.append(m)
         return len(self.meshes) - 1
 
+    def _is_current(self, m: dict) -> bool:
+        """Whether the mesh drawing ``m`` is that of the solver's mesh now. A refined run's snapshots
+        may all lie on an earlier mesh: a checkpoint then keeps their mesh (:meth:`state`), since
+        :meth:`restore` of the short format takes the solver's mesh."""
+        c = self.current_mesh()
+        return all(m[k].shape == c[k].shape and np.array_equal(m[k], c[k]) for k in c)
+
     @property
     def changing_mesh(self) -> bool:
         """The snapshots were taken on more than one mesh."""
@@ -106,10 +113,8 @@ class Snapshots:
         k = len(self.loads)
         out = {"loads": np.asarray(self.loads, dtype=float), "steps": np.asarray(self.steps, dtype=int),
                "pending": np.asarray(self.pending, dtype=int)}
-        if not self.changing_mesh:
-            nv = len(self.meshes[0]["vertices"]) if self.meshes else 0
-            out.update({"u": np.asarray(self.u, dtype=float).reshape(k, nv, self.dim),
-                        "alpha": np.asarray(self.alpha, dtype=float).reshape(k, nv)})
+        if not self.changing_mesh and (not self.meshes or self._is_current(self.meshes[0])):
+            out["u"], out["alpha"] = self._stacked()
             if self.section:
                 out["section_alpha"] = np.asarray(self.section, dtype=float)
             return out   # the mesh is the solver's (restore takes it from there)
@@ -120,6 +125,13 @@ class Snapshots:
             out[f"u__{i}"] = self.u[i]
             out[f"alpha__{i}"] = self.alpha[i]
         return out
+
+    def _stacked(self) -> tuple:
+        """u (k x vertices x dim, mm) and alpha (k x vertices) of snapshots taken on one mesh."""
+        k = len(self.loads)
+        nv = len(self.meshes[0]["vertices"]) if self.meshes else 0
+        return (np.asarray(self.u, dtype=float).reshape(k, nv, self.dim),
+                np.asarray(self.alpha, dtype=float).reshape(k, nv))
 
     def vertex_fields(self):
         s = self.solver
@@ -173,11 +185,11 @@ class Snapshots:
         ``{name}@{g}__{field}`` with g = 1, 2, ... in the order of the loads."""
         groups = self.groups()
         if not self.changing_mesh:
-            st = self.state()
+            u, alpha = self._stacked()
             m = self.meshes[0] if self.meshes else self.current_mesh()
             out = {f"{name}__vertices": m["vertices"], f"{name}__triangles": m["triangles"],
-                   f"{name}__rho": m["rho"], f"{name}__loads": st["loads"], f"{name}__steps": st["steps"],
-                   f"{name}__u": st["u"], f"{name}__alpha": st["alpha"]}
+                   f"{name}__rho": m["rho"], f"{name}__loads": np.asarray(self.loads, dtype=float),
+                   f"{name}__steps": np.asarray(self.steps, dtype=int), f"{name}__u": u, f"{name}__alpha": alpha}
             if self.section and len(self.section) == len(self.loads):
                 g = self.section_grid()
                 out.update({f"{name}__section_plane": np.asarray([g["axis"], g["at"]], dtype=float),

@@ -112,6 +112,30 @@ def test_interrupted_adaptive_run_resumes_on_its_refined_mesh(reference, tmp_pat
         np.testing.assert_allclose(z[k], z_ref[k], rtol=1e-9, atol=1e-12, err_msg=k)
 
 
+def test_resume_after_a_refinement_with_the_snapshots_on_an_earlier_mesh(tmp_path):
+    """A checkpoint written after a refinement, while every snapshot so far lies on the mesh before
+    it, keeps that mesh: resuming used to read the snapshots onto the refined mesh and failed at
+    the next checkpoint ("cannot reshape array"; a medium L-panel run with refinement, measured)."""
+    one = {"snapshot_loads": [0.002]}
+    ref = _run(tmp_path / "ref", **one).history
+    refined = [int(i) for i in ref.index[1:] if ref["elements"][i] > ref["elements"][i - 1]]
+    stop_step = next(i for i in refined if ref["load"][i - 1] >= 0.002)   # snapshot on an earlier mesh
+    out = tmp_path / "run"
+
+    def stop(sim, row):
+        if row["step"] == stop_step:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _run(out, callbacks=[stop], **one)
+    h = _run(out, resume=True, **one).history
+    assert len(h) == len(ref)
+    z, z_ref = np.load(out / "snapshots.npz"), np.load(tmp_path / "ref" / "snapshots.npz")
+    assert sorted(z.files) == sorted(z_ref.files)
+    for k in z.files:
+        np.testing.assert_allclose(z[k], z_ref[k], rtol=1e-9, atol=1e-12, err_msg=k)
+
+
 def test_state_of_a_refined_run_needs_adapt():
     """A state on a refined mesh, set on a simulation without adaptive refinement, is refused."""
     sim = ngtmc.Simulation(_scene(), SCHEDULE, CONTROL, compile=True, adapt=ADAPT)
