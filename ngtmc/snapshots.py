@@ -68,20 +68,18 @@ class Snapshots:
 
     def _mesh_index(self) -> int:
         """Index of the solver's current mesh in :attr:`meshes` (added if it is new)."""
-        m = self.current_mesh()
-        if self.meshes:
-            last = self.meshes[-1]
-            if all(last[k].shape == m[k].shape and np.array_equal(last[k], m[k]) for k in m):
-                return len(self.meshes) - 1
-        self.meshes.append(m)
+        if self.meshes and self._is_current(self.meshes[-1]):
+            return len(self.meshes) - 1
+        self.meshes.append(self.current_mesh())
         return len(self.meshes) - 1
 
     def _is_current(self, m: dict) -> bool:
-        """Whether the mesh drawing ``m`` is that of the solver's mesh now. A refined run's snapshots
+        """Whether the mesh drawing ``m`` is that of the solver's mesh now (the one comparison of
+        drawings: :meth:`_mesh_index` and :meth:`state`). A refined run's snapshots
         may all lie on an earlier mesh: a checkpoint then keeps their mesh (:meth:`state`), since
         :meth:`restore` of the short format takes the solver's mesh."""
         c = self.current_mesh()
-        return all(m[k].shape == c[k].shape and np.array_equal(m[k], c[k]) for k in c)
+        return m is c or all(m[k].shape == c[k].shape and np.array_equal(m[k], c[k]) for k in c)
 
     @property
     def changing_mesh(self) -> bool:
