@@ -36,7 +36,10 @@ def build_mesh(p: dict):
     if not (xl + R < 500 and xl - R - margin > 250):
         raise ValueError("l_panel geometry: the indenter and its void must fit under the arm (250 < x < 500)")
     outer = MoveTo(0, 0).LineTo(250, 0).LineTo(250, 250).LineTo(500, 250).LineTo(500, 500).LineTo(0, 500).Close().Face()
-    band = MoveTo(150, 230).Rectangle(110, 90).Face() * outer
+    bl = float(p.get("band_left", 150.0))
+    if not 0.0 <= bl < 250.0:
+        raise ValueError(f"l_panel geometry: band_left = {bl} mm must lie in [0, 250) (the band ends at x = 260 mm)")
+    band = MoveTo(bl, 230).Rectangle(260 - bl, 90).Face() * outer
     if _segment(p):  # a vertex at x = load_x splits the arm's lower face: the load segment is its own edge
         cz = MoveTo(xl - 40, 250).LineTo(xl, 250).LineTo(500, 250).LineTo(500, 270).LineTo(xl - 40, 270).Close().Face()
     else:

@@ -47,7 +47,7 @@ Geometry (mm; the paper's Fig. 12 is not available, sizes it does not give are o
 * void (rho = 0): the box x in [load_x - R - 10, 500], y from the indenter's flat edge to the arm's
   lower face, minus the indenter. No regulariser (paper: "no regularisation energy is introduced
   in the void domain"), so linear triangles (displacement order 1) throughout, as the paper;
-* mesh: refined band x in [150, 260] x y in [230, 320] (``h_band``) around the expected crack path
+* mesh: refined band x in [150, 260] x y in [230, 320] (``h_band``; ``band_left`` moves its left end) around the expected crack path
   (from the corner at (250, 250) to the left and slightly up, Winkler's experiments and Ambati et
   al. 2015), contact zone x in [430, 500] x y in [250, 270] in the arm (``h_contact``), void and
   indenter ``h_void``, the rest ``h_far``.
@@ -369,6 +369,8 @@ PARAMETERS = {
     "load_x": (470.0, "mm", "x of the indenter axis, 30 mm from the arm's right end (Winkler)"),
     "indenter_radius": (20.0, "mm", "radius of the semicircular indenter (our choice)"),
     "void_margin": (10.0, "mm", "void box extends this far left of the indenter (our choice)"),
+    "band_left": (150.0, "mm", "left end of the refined band (x from band_left to 260 mm, y from 230 to 320 mm; "
+                  "our choice, around the expected crack path)"),
     "clamp_strip": (25.0, "mm", "height of the strip along the clamped edge without fracture (our choice)"),
     "k_u": (50.0, "1/N", "step-size sensitivity of Eq. 20, W_f per unit thickness (paper: 50)"),
     **SOLVER_PARAMETERS,
