@@ -268,3 +268,26 @@ def test_segment_loading_variant_has_no_contact():
     assert band["x"][0] == pytest.approx(0.0)  # the Winkler band is not shifted
     with pytest.raises(ValueError, match="load_introduction"):
         S.cases(study_parameters(S, "quick", {"load_introduction": "plate"})[1])[0].build_scene()
+
+
+def test_band_left_moves_the_refined_band_only():
+    """``band_left`` (mm) moves the left end of the refined band (default 150 mm): the band is
+    x in [band_left, 260] x y in [230, 320] mm cut to the panel, the panel's area is unchanged;
+    a value outside [0, 250) is refused."""
+    import ngsolve as ngs
+
+    def areas(overrides):
+        _, p = study_parameters(S, "quick", overrides)
+        mesh = S.cases(p)[0].build_scene().mesh
+        return (ngs.Integrate(1, mesh, definedon=mesh.Materials("band")),
+                ngs.Integrate(1, mesh, definedon=mesh.Materials("band|contact_zone|clamp_strip|panel")), mesh.ne)
+
+    band, panel, ne = areas({})
+    # the band above the cut-out's corner (y > 250) spans x from band_left to 260, below it to 250
+    assert band == pytest.approx(110 * 70 + 100 * 20, rel=1e-9)
+    wide, panel_wide, ne_wide = areas({"band_left": 100})
+    assert wide == pytest.approx(160 * 70 + 150 * 20, rel=1e-9)
+    assert panel_wide == pytest.approx(panel, rel=1e-9) and panel == pytest.approx(500 ** 2 - 250 ** 2, rel=1e-9)
+    assert ne_wide > ne
+    with pytest.raises(ValueError, match="band_left"):
+        S.cases(study_parameters(S, "quick", {"band_left": 250})[1])[0].build_scene()
