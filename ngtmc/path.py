@@ -67,6 +67,7 @@ import math
 
 import numpy as np
 
+from .displacement_newton import SECANT_DAMPING, secant_displacement  # noqa: F401 (SECANT_DAMPING: re-exported)
 from .path_sizing import DissipationSizing
 
 __all__ = ["DissipationPath"]
@@ -82,12 +83,6 @@ __all__ = ["DissipationPath"]
 #: 2e-6 mm at step 106; docs/performance.md, "The step control's scale under path following").
 N_S = 1
 
-#: Fractions of the secant extrapolation tried, in turn, for the predictor of a step: the first
-#: that keeps J > 0 everywhere is taken; if none does, the step starts from the u solve with
-#: alpha_{n-1}. Where the void under a contact is squeezed to J of about 1e-3, the full secant
-#: inverts elements there, and the u solve then took 7-13 Newton iterations per step (the 3D
-#: hemisphere; docs/three-d.md).
-SECANT_DAMPING = (1.0, 0.5, 0.25)
 
 #: Rule 3: a dissipation step whose load moves (or is predicted to move) more than du_max is sized
 #: to move it by this fraction of du_max.
@@ -418,27 +413,17 @@ class DissipationPath:
         [alpha_n, 1]), with the boundary values of ``load`` (default: the secant load
         lambda_n + ratio (lambda_n - lambda_{n-1})). Returns the load, or None (state unchanged)
         when there is no previous state, the ratio is outside (0, 2], or an element would invert."""
-        if self.x_prev is None or not (0.0 < ratio <= 2.0):
+        if self.x_prev is None:
             return None
         s = self.sim.solver
         u_n, a_n = self.x_n
         u_p, a_p = self.x_prev
         if load is None:
             load = self.load_n + ratio * (self.load_n - self.load_prev)
-        uN = s.u.vec.FV().NumPy()
-        keep_u = uN.copy()
-        dirm = s._dir_np
-        target = s.dirichlet_target(load)[dirm]
-        for damping in SECANT_DAMPING:
-            uN[:] = u_n + damping * ratio * (u_n - u_p)
-            uN[dirm] = target
-            if s.ranks.all_finite(uN) and s.min_J() > 0.0:
-                break
-        else:
-            uN[:] = keep_u
+        f = secant_displacement(s, u_n, u_p, ratio, load)
+        if f is None:
             return None
-        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + damping * ratio * (a_n - a_p), a_n, 1.0)
-        s._r_valid = False
+        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + f * (a_n - a_p), a_n, 1.0)
         return load
 
     def accepted(self, step_size: float, iterations: int = 0, cutbacks: int = 0):

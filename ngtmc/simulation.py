@@ -276,12 +276,13 @@ class Simulation(RunRecords, RunState, StepSchemes):
         step_size = abs(self.schedule.load(t_new) - self.schedule.load(self.t)) if t_new != self.t else 0.0
         if s.alpha is not None:
             s.update_history(info["H_trial"])
+        self._remember_displacement(saved)
         self.t = t_new
         self.step += 1
         self.control_state = ctrl.accepted(self.control_state, n_s=PATH_N_S if self._path is not None else None)
-        row = self._record(step_size=step_size, staggered_iterations=info["staggered_iterations"], cutbacks=cutbacks,
-                           projected=info["projected"], **totals)
         wf = s.fracture_energy_per_thickness()
+        row = self._record(wf=wf, step_size=step_size, staggered_iterations=info["staggered_iterations"],
+                           cutbacks=cutbacks, projected=info["projected"], **totals)
         self.last_delta_wf = wf - self._wf_prev
         self._wf_prev = wf
         if self._path is not None:

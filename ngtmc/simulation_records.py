@@ -23,10 +23,12 @@ class RunRecords:
             return self._elapsed_before
         return self._elapsed_before + time.perf_counter() - self._t_start
 
-    def _record(self, **info):
+    def _record(self, wf: float | None = None, **info):
+        """Append and return the history row of the current state; ``wf``: its W_f per unit
+        thickness where the caller has computed it."""
         s = self.solver
         t0 = time.perf_counter()
-        en = s.energies()
+        en = s.energies(wf)
         forces = s.reactions(reuse_residual=self.step > 0)
         row = {
             "step": self.step,

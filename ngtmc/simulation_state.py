@@ -16,7 +16,8 @@ class RunState:
 
     def get_state(self) -> dict:
         """Everything needed to resume: solver fields, pseudo-time, step, controller, history rows,
-        and with path following its rule's state (``path``, scalars) and predictor (``arrays``)."""
+        the displacement secant's previous point (``u_before``, ``load_before``), and with path
+        following its rule's state (``path``, scalars) and predictor (``arrays``)."""
         st = {"solver": self.solver.get_state(), "t": self.t, "step": self.step,
               "control": self.control_state.as_dict(), "last_delta_wf": self.last_delta_wf, "wf_prev": self._wf_prev,
               "elapsed": self._elapsed(), "rows": [dict(r) for r in self.rows]}
@@ -24,6 +25,10 @@ class RunState:
         if self._path is not None:
             st["path"] = self._path.get_state()
             arrays.update(self._path.get_arrays())
+        before = self._u_before
+        if before is not None and before[2] == self.solver.mesh_generation:  # the displacement secant's point
+            arrays["u_before"] = before[0]
+            st["load_before"] = before[1]
         if self.refinements:  # the mesh of the state: the initial one refined as recorded (bisection.replay)
             st["refinements"] = [{"step": step, **rec.as_dict()} for step, rec in self.refinements]
             arrays["refined_elements"] = np.concatenate([rec.elements for _, rec in self.refinements])
@@ -48,6 +53,11 @@ class RunState:
         self._elapsed_before = float(st["elapsed"])
         self._t_start = None
         self.rows = [dict(r) for r in st["rows"]]
+        arrays = st.get("arrays") or {}
+        self._u_before = None
+        if "u_before" in arrays and np.size(arrays["u_before"]) == self.solver.fes_u.ndof:
+            self._u_before = (np.array(arrays["u_before"], dtype=float), float(st["load_before"]),
+                              self.solver.mesh_generation)
         if self._path is not None:
             if "path" in st:
                 self._path.set_state(st["path"], st.get("arrays", {}))

@@ -8,8 +8,9 @@ One load step of the paper's scheme (Sect. "Numerical implementation") is, with 
    indefinite, and the Dirichlet increment carried by the Newton increment);
 3. :meth:`Solver.update_history`: H_n = max(H_{n-1}, Psi_plus(u_n)) at the quadrature points.
 
-:mod:`ngtmc.simulation` drives these through a load schedule. Three parts of :class:`Solver` live in
-modules of their own, as its bases: the displacement Newton (:mod:`ngtmc.displacement_newton`),
+:mod:`ngtmc.simulation` drives these through a load schedule. Four parts of :class:`Solver` live in
+modules of their own, as its bases: the displacement energy, its rules and forms
+(:mod:`ngtmc.displacement_energy`), the displacement Newton (:mod:`ngtmc.displacement_newton`),
 the boundary conditions and reactions (:mod:`ngtmc.boundary_conditions`), and the phase field and
 history (:mod:`ngtmc.phase_field`); the form wrappers are :mod:`ngtmc.energy_forms`.
 
@@ -18,23 +19,20 @@ Units: mm, N, MPa. Forces and energies returned by this module are for the scene
 from __future__ import annotations
 
 import dataclasses
-import functools
 import re
 
 import numpy as np
 import ngsolve as ngs
 from ngsolve.comp import IntegrationRuleSpace
 
-from . import contact_regularisation as creg
-from . import fracture
-from . import splits
-from .materials import deformation_gradient, gamma_interpolation, gc_interpolation, psi_dev, psi_vol
+from .materials import deformation_gradient, gamma_interpolation, gc_interpolation
 from .boundary_conditions import BoundaryConditions
-from .energy_forms import _ExternalWork, _QuadraticPlus, merged_terms
+from .displacement_energy import DisplacementEnergy, _regex
+from .energy_forms import _ExternalWork
 from .phase_field import PhaseFieldHistory
 from .displacement_newton import DISPLACEMENT_RTOL, FLOOR_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .distributed import Ranks
-from .discretisation import bilinear_form, lower_order_outside, real_compile, rules
+from .discretisation import lower_order_outside
 from .conditions import Point, Support, Traction
 from .scene import Scene, _names
 
@@ -53,11 +51,7 @@ AUTO_REAL_COMPILE_DOFS = 10000
 TIMING_KEYS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
 
 
-def _regex(names):
-    return "|".join(names)
-
-
-class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
+class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFieldHistory):
     """Fields and solvers of a :class:`~ngtmc.scene.Scene`.
 
     Attributes worth knowing: ``u`` (displacement GridFunction, mm), ``alpha`` (phase field
@@ -180,6 +174,7 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
         self._scratch_irs = ngs.GridFunction(self.irs)
         self._scratch_guard = ngs.GridFunction(self._guard_irs)
         self.H_committed = np.zeros(self.irs.ndof)
+        self._psi_plus_cf = None   # Psi_plus(u), compiled at its first use (psi_plus_values)
         if frac:
             self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self._frac_re))
             self.alpha = ngs.GridFunction(self.fes_a, name="alpha")
@@ -192,7 +187,11 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
 
         # ------------------------------------------------------------ displacement energy
         self._quadratic_forms = []   # the _QuadraticPlus wrappers of _energy_form, for mesh_changed
-        self.a_u = self._energy_form(self.fes_u.TrialFunction())
+        # the integrands of a_u by recorded energy (elastic_energy, regularisation_energy): the
+        # forms of energies() are made of the same compiled objects (no compilation of their own)
+        self._energy_parts = {}
+        self._energy_forms = None
+        self.a_u = self._energy_form(self.fes_u.TrialFunction(), parts=self._energy_parts)
         if self._tractions:
             self.a_u = _ExternalWork(self.a_u, self)
         self._a_shift = None
@@ -251,6 +250,7 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
         self._tmp = self.u.vec.CreateVector()
         self._u0 = self.u.vec.CreateVector()
         self._r_valid = False  # True while self._r holds the residual of the current u
+        self._energy_forms = None
         for q in self._quadratic_forms:
             q.mesh_changed()
 
@@ -273,147 +273,7 @@ class Solver(BoundaryConditions, DisplacementNewton, PhaseFieldHistory):
         if self.alpha is not None and self.alpha_committed.size != self.fes_a.ndof:
             self.alpha_committed = np.zeros(self.fes_a.ndof)
 
-    # ================================================================= energies
-    def _maybe_compile(self, cf):
-        """``cf`` compiled as ``compile`` says (C++ code, symbolic, or not at all). The same object
-        is compiled once: a C++ compilation costs about 3.4 s whatever the expression (the
-        undegraded energy of the void and of the other regions is one object)."""
-        cache = self._compiled
-        hit = cache.get(id(cf))
-        if hit is not None and hit[0] is cf:
-            return hit[1]
-        compiled = None
-        if self._compile == "real":
-            compiled = real_compile(cf)
-            if compiled is None:
-                self._compile = True  # fall back for the remaining terms too (warned once)
-        if compiled is None:
-            compiled = cf.Compile() if self._compile else cf
-        cache[id(cf)] = (cf, compiled)
-        return compiled
-
-    def energy_terms(self, u, alpha=None, F=None):
-        """List of (name, energy density CF, region regex) of the displacement problem for field or trial u.
-
-        Names: "elastic_vol", "elastic_dev" (Psi_bar parts, degraded by g(alpha) in fracture
-        regions) and "regularisation" (Phi_bar). Densities in MPa, integrated over the regions.
-        With ``Scene.formulation == "anisotropic"`` the fracture regions carry instead
-        "elastic_plus" (g(alpha) Psi_plus) and "elastic_minus" (Psi_minus) of the scene's split
-        (:mod:`ngtmc.splits`; Miehe et al. 2010, Eq. 3.13).
-        ``alpha``: phase field to degrade with (a trial function for the coupled problem), default
-        the solver's alpha GridFunction. ``F``: deformation gradient of the elastic terms, default
-        I + grad u; pass the 3 x 3 one of :func:`~ngtmc.materials.full_deformation_gradient` made a
-        variable (``MakeVariable``) to differentiate the energy for the stress (:mod:`ngtmc.vtk`)."""
-        F = deformation_gradient(u) if F is None else F
-        terms = []
-        sc = self.scene
-        if self.alpha is not None:
-            g = fracture.degradation(self.alpha if alpha is None else alpha, sc.residual_stiffness)
-            if sc.formulation == "anisotropic":
-                plus, minus = splits.split_energy(sc.split, F, self.K, self.G)
-                terms.append(("elastic_plus", g * plus, self._frac_re))
-                terms.append(("elastic_minus", minus, self._frac_re))
-            else:
-                terms.append(("elastic_vol", g * psi_vol(F, self.K), self._frac_re))
-                terms.append(("elastic_dev", g * psi_dev(F, self.G), self._frac_re))
-        vol, dev = psi_vol(F, self.K), psi_dev(F, self.G)  # one object each: compiled once (_maybe_compile)
-        for others in (self._high_re, self._low_re):
-            if others:
-                terms.append(("elastic_vol", vol, others))
-                terms.append(("elastic_dev", dev, others))
-        reg = sc.regulariser
-        if reg is not None:
-            k_r = creg.regularisation_stiffness(reg.kbar_r, reg.length, self.K0)
-            phi = creg.phi_bar(u, k_r, indicator=1 - self.rho, damping=reg.damping)
-            terms.append(("regularisation", phi, _regex(_names(reg.regions))))
-        return terms
-
-    def energy_measure(self, name: str, regions: str):
-        """Integration measure (with its explicit rule) of the displacement energy term ``name`` on
-        ``regions`` (one of the region regexes of :meth:`energy_terms`). The one owner of the
-        integration rules: Newton, the reaction, the energies and the adjoint all use it.
-
-        * Elastic terms where the displacement has order p >= 2: the rule of order 2p (6 points on
-          a triangle for p = 2), not NGSolve's default for a Variation (order 2p - 2: 3 points).
-          With the default rule the energy does not see J between its 3 points: in a squeezed void
-          an element can fold towards J = 0 at no energy cost, the J > 0 guard then cuts every
-          Newton step and Newton stalls (three-point bending after the peak). In the fracture
-          regions these are the history points, so energy, J guard and history agree.
-        * Elastic terms on order-1 elements (a scene without regulariser, or the elements outside
-          the regulariser's regions when the order varies per element): the rule of the history
-          (order 2, 3 points on a triangle) where some elements border order-2 ones or carry
-          the history, else one point (F is constant per element).
-        * The Hessian regulariser: order 2p - 4 (exact for p = 2 on straight elements; NGSolve's
-          default)."""
-        p = self.order
-        meas = functools.partial(ngs.dx, definedon=self.mesh.Materials(regions))
-        if name == "regularisation":
-            return meas(intrules=rules(self.mesh, max(2 * p - 4, 0)))
-        if p == 1:
-            return meas(intrules=rules(self.mesh, 0))
-        if regions == self._high_re or not self._variable_order:
-            return meas(intrules=self._guard_irs.GetIntegrationRules())
-        return meas(intrules=self.irs.GetIntegrationRules())
-
-    def _energy_form(self, trial, extra=None):
-        """The displacement energy as a form with Apply / Energy / AssembleLinearization / mat.
-
-        A term whose energy is quadratic in u (the Hessian regulariser without damping) has a
-        constant tangent: it is assembled once and added (:class:`_QuadraticPlus`) instead of
-        being re-assembled at every Newton iteration."""
-        a = bilinear_form(self.fes_u, symmetric=True)
-        quadratic = None
-        for name, density, regions in merged_terms(self.energy_terms(trial)):
-            if name == "regularisation" and self.scene.regulariser.damping == "none":
-                # assembled once: not worth a compilation
-                density_q, measure_q = density, self.energy_measure(name, regions)
-                quadratic = bilinear_form(self.fes_u, symmetric=True)
-                quadratic += ngs.Variation(density_q * measure_q)
-                # a zero term on every element gives K the sparsity pattern of the tangent
-                quadratic += ngs.Variation(ngs.Parameter(0.0) * ngs.InnerProduct(trial, trial) * ngs.dx)
-                continue
-            a += ngs.Variation(self._maybe_compile(density) * self.energy_measure(name, regions))
-        if extra is not None:
-            a += ngs.Variation(extra)
-        if quadratic is None:
-            return a
-        if self.ranks.parallel:  # the constant-tangent wrapper adds local matrices: fold the term in
-            a += ngs.Variation(density_q * measure_q)
-            return a
-        q = _QuadraticPlus(a, quadratic, self._design_key)
-        self._quadratic_forms.append(q)
-        return q
-
-    def elastic_rule_is_history_rule(self) -> bool:
-        """True when the elastic terms of the fracture regions are integrated at the history points
-        (:meth:`energy_measure`: displacement order >= 2), so that a term at the history points
-        and one with the elastic measure there can be summed into one integrand
-        (tests/test_monolithic.py checks the two rules against each other)."""
-        return self.order >= 2
-
-    def _design_key(self) -> tuple:
-        """Everything a constant tangent depends on besides u: the pseudo-density and the material
-        parameters (both change between runs of an optimisation or a finite-difference check)."""
-        rho = self.rho.vec.FV().NumPy()
-        pars = tuple(q.Get() for m in self.material_parameters.values() for q in m.values())
-        return (hash(rho.tobytes()), pars, self.gamma0.Get())
-
-    def energies(self) -> dict:
-        """Current energies, N mm (for the scene thickness): elastic_energy (int g Psi_bar),
-        regularisation_energy (int Phi_bar), fracture_energy (W_f of Eq. 19) and
-        dissipated_energy (W_f / c_w, the crack surface energy of Eq. 5)."""
-        out = {"elastic_energy": 0.0, "regularisation_energy": 0.0}
-        for name, density, regions in self.energy_terms(self.u):
-            key = "regularisation_energy" if name == "regularisation" else "elastic_energy"
-            # NGSolve trap: Integrate of an integral (cf * dx) is the rank's part on a distributed mesh
-            out[key] += self.ranks.sum(float(ngs.Integrate(density * self.energy_measure(name, regions), self.mesh)))
-        t = self.thickness
-        out = {k: v * t for k, v in out.items()}
-        wf = self.fracture_energy_per_thickness()
-        out["fracture_energy"] = wf * t
-        out["dissipated_energy"] = wf * t / fracture.C_W
-        return out
-
+    # ================================================================= J and the fracture box
     def J_values(self) -> np.ndarray:
         """det F at the guard quadrature points (dimensionless), element by element; a view of a
         scratch vector that the next call overwrites."""

@@ -33,7 +33,7 @@ import numpy as np
 import ngsolve as ngs
 
 from .materials import deformation_gradient, full_deformation_gradient
-from .solver import merged_terms
+from .energy_forms import merged_terms
 
 __all__ = ["FIELDS", "DISPLACEMENT", "VtkGeometry", "VtkWriter", "pvd_text", "vtu_bytes", "write_pvd", "write_vtu"]
 
