@@ -52,7 +52,7 @@ applied: it bounds the dissipation per step, which the path now does itself):
 6. Every step starts from the secant predictor x_n + r (x_n - x_{n-1}) through the last two
    accepted states (alpha kept in [alpha_n, 1]; r the ratio of the load or dissipation
    increments, at most 2; damped to r/2 or r/4 where the full secant would invert an element,
-   SECANT_DAMPING), or, without it, from the u solve with alpha_{n-1}.
+   :data:`ngtmc.displacement_newton.SECANT_DAMPING`), or, without it, from the u solve with alpha_{n-1}.
 
 dD = Gc_ref ``crack_advance`` (times the crack front's length ``crack_front`` in 3D) times the
 step control's scale, which halves on a failed step and doubles back after successes like the load
@@ -67,7 +67,7 @@ import math
 
 import numpy as np
 
-from .displacement_newton import SECANT_DAMPING, secant_displacement  # noqa: F401 (SECANT_DAMPING: re-exported)
+from .displacement_newton import secant_displacement
 from .path_sizing import DissipationSizing
 
 __all__ = ["DissipationPath"]

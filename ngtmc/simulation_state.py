@@ -60,7 +60,7 @@ class RunState:
                               self.solver.mesh_generation)
         if self._path is not None:
             if "path" in st:
-                self._path.set_state(st["path"], st.get("arrays", {}))
+                self._path.set_state(st["path"], arrays)
             else:  # a state of a run without path following: start the rule from this state
                 self._path.set_state({"rate": 0.0, "d_prev": self.coupled.D.value(), "dissipation_steps": 0})
 
