@@ -85,6 +85,10 @@ class StepSchemes:
         #: the displacement and load (mm) of the accepted state before the last one, and the
         #: mesh generation they belong to, for :meth:`_predict_displacement` (None: no such state)
         self._u_before = None
+        #: whether the displacement Newton starts from the secant predictor
+        #: (:meth:`_predict_displacement`); False: from the last accepted state, as the replays of
+        #: the adjoint's recorded paths do (:func:`ngtmc.sensitivities.record_path`)
+        self.secant_predictor = True
         if scheme in ("monolithic", "path-following") and self.solver.alpha is not None:
             from .coupled import CoupledNewton
             self.coupled = CoupledNewton(self.solver, **copt)
@@ -129,7 +133,7 @@ class StepSchemes:
         the predictor was taken."""
         prev = self._u_before
         s = self.solver
-        if prev is None or prev[2] != s.mesh_generation or s.load == prev[1]:
+        if not self.secant_predictor or prev is None or prev[2] != s.mesh_generation or s.load == prev[1]:
             return False
         ratio = (load - s.load) / (s.load - prev[1])
         return secant_displacement(s, s.u.vec.FV().NumPy().copy(), prev[0], ratio, load) is not None

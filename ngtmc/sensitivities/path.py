@@ -259,6 +259,9 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     sim = Simulation(scene, schedule, control, newton=newton, **options)
     s = sim.solver
     s.floor_rtol = None  # states at the residual floor would limit the gradient's accuracy
+    # each step starts from the last accepted state, as replay() and the recomputation between
+    # checkpoints do (_step), so that they reproduce the recorded states exactly
+    sim.secant_predictor = False
     states = [_capture(s)]
     forces = [s.reaction()]
 
