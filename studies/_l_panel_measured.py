@@ -214,6 +214,17 @@ MEASURED = {
         "crack_x_at_turning_point": 133.6,
         "unload_wf_growth": 0.0, "force_unloaded_at_gap": 2221, "reload_peak_force": 5070,
         "reload_peak_load": 6.3040, "final_force": 91, "final_wf": 10575.8},
+    "medium_path_following_band_left_100_2026_12_05": {
+        "note": "the run of medium_path_following_paper_schedule_2026_12_03 with --set band_left=100 (the refined "
+                "band from x = 100 instead of 150 mm), one thread, beside benchmarks and two CI runs (paused for "
+                "18 minutes): the crack stops at the band's new end by the turning point",
+        "band_left": 100.0, "elements": 39146, "ndof_u": 39364, "ndof_alpha": 19682,
+        "steps": 357, "newton_iterations": 1561, "cutbacks": 22, "wall_time_s": 5976,
+        "first_loading_peak_force": 16837, "first_loading_peak_load": 6.2736,
+        "force_at_turning_point": 3541, "wf_at_turning_point": 4564.5, "dissipated_at_turning_point": 2282.3,
+        "crack_x_at_turning_point": 100.0, "crack_x_at_7": 77.6,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 1779, "reload_peak_force": 4341,
+        "reload_peak_load": 6.9255, "final_force": 4274, "final_wf": 7013.9},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,

@@ -245,6 +245,27 @@ def test_reload_peak_against_l0_record():
     assert series["first-loading peak (medium, path following)"]["y"] == first
 
 
+def test_reload_peak_set_by_the_band_end_record():
+    """The recorded medium run with the refined band from x = 100 instead of 150 mm (the paper's
+    schedule, path following, l0 = 1.1875 mm): the same first loading, but the crack stops at the
+    band's end by the turning point in both runs (x = 149 and 100 mm), so the wider band's crack is
+    50 mm longer there and the reload peak halves, from above the paper's 7.6 kN to below it. The
+    report's third figure shows the point."""
+    band = S.MEASURED["medium_path_following_paper_schedule_2026_12_03"]
+    r10 = S.MEASURED["medium_path_following_indenter_r10_2026_12_04"]  # reloads as band does, crack_x recorded
+    wide = S.MEASURED["medium_path_following_band_left_100_2026_12_05"]
+    assert S.PARAMETERS["band_left"][0] == 150.0 and wide["band_left"] == 100.0
+    assert r10["crack_x_at_turning_point"] == pytest.approx(150.0, abs=2.0)
+    assert wide["crack_x_at_turning_point"] == pytest.approx(100.0, abs=2.0)
+    assert wide["first_loading_peak_force"] == pytest.approx(band["first_loading_peak_force"], rel=1e-3)
+    assert wide["dissipated_at_turning_point"] > 1.3 * r10["dissipated_at_turning_point"]
+    assert wide["reload_peak_force"] < 0.55 * band["reload_peak_force"]
+    assert wide["reload_peak_force"] < 7600.0 < band["reload_peak_force"]
+    fig = S.figures(study_parameters(S, "quick")[1])[2]
+    (point,) = [s for s in fig["series"] if "band from x = 100 mm" in s["label"]]
+    assert point["x"] == [1.1875] and point["y"] == [wide["reload_peak_force"]]
+
+
 # the published reload peak (strict xfail, with the measured values) and the measured quick values
 # (regression guard, 5 %): the study's EXPECTED
 test_expected = expected_test(S)
