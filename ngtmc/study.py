@@ -76,7 +76,7 @@ INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
 #: hashes and comparisons at that value, so that the runs still resume and compare.
 ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
-                    "amr_history_fraction": 1.0}
+                    "amr_history_fraction": 1.0, "band_left": 150.0}
 
 
 def effective_parameters(p: dict) -> dict:

@@ -224,6 +224,10 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_size_tolerance"}
     assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
     assert parameters_hash(dict(p, h_crack=2.0, amr_size_tolerance=1.41)) != parameters_hash(dict(p, h_crack=2.0))
+    # an L-panel run recorded before band_left existed (the band from x = 150 mm) resumes
+    assert p["band_left"] == 150.0
+    assert parameters_hash({k: v for k, v in p.items() if k != "band_left"}) == parameters_hash(p)
+    assert parameters_hash(dict(p, band_left=100.0)) != parameters_hash(p)
     # and before amr_history_fraction existed (1)
     assert p["amr_history_fraction"] == 1.0
     old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_history_fraction"}
