@@ -173,7 +173,7 @@ class DisplacementEnergy:
 
         The first two are the energies of the displacement form's own integrands, term by term
         (the same rules and compiled code as Newton; ``Integrate`` of the same densities took
-        about 3x as long: 32 against 11 ms on the quick L-panel)."""
+        about twice as long: 32 against 14.8 ms on the quick L-panel, docs/performance.md)."""
         if self._energy_forms is None:
             self._energy_forms = {}
             for key, integrands in self._energy_parts.items():

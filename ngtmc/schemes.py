@@ -140,9 +140,10 @@ class StepSchemes:
 
     def _remember_displacement(self, before: dict):
         """After an accepted step: ``before`` (a solver state on the current mesh, the state the
-        step started from) becomes the secant's previous point (:meth:`_predict_displacement`)."""
-        if self._path is None:
-            self._u_before = (np.array(before["u"], dtype=float), float(before["load"]), self.solver.mesh_generation)
+        step started from, whose arrays are the caller's own copies) becomes the secant's previous
+        point (:meth:`_predict_displacement`)."""
+        if self._path is None and self.secant_predictor:
+            self._u_before = (np.asarray(before["u"], dtype=float), float(before["load"]), self.solver.mesh_generation)
 
     def _passes(self, load: float, max_passes: int, info: dict | None = None, newton_every: int = 0,
                 predicted: bool = False):
