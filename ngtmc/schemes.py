@@ -23,7 +23,7 @@ import numpy as np
 
 from .displacement_newton import secant_displacement
 
-__all__ = ["SCHEMES", "PATH_STEPS", "StepSchemes"]
+__all__ = ["SCHEMES", "PATH_STEPS", "StepSchemes", "alpha_u_passes"]
 
 #: Solution schemes of a load step (see the module docstring).
 SCHEMES = ("single-pass", "staggered", "monolithic", "path-following")
@@ -33,10 +33,80 @@ SCHEMES = ("single-pass", "staggered", "monolithic", "path-following")
 PATH_STEPS = 50
 
 
+def alpha_u_passes(s, load: float, max_passes: int = 1, info: dict | None = None, staggered_tol: float = 0.0,
+                   newton_every: int = 0, coupled_newton=None, predicted: bool = False):
+    """alpha-u-H passes of solver ``s`` (:class:`ngtmc.solver.Solver`) at a fixed ``load`` (mm)
+    (Sect. 4 of MODEL.md): alpha from the latest history, Newton for u, trial history. The one
+    copy of the step's sequence: the runs' schemes and the adjoint's replays call it.
+
+    One pass (``max_passes=1``) is the paper's scheme; several, until alpha changes by at most
+    ``staggered_tol`` (max norm), the converged staggered scheme. ``newton_every`` > 0 calls
+    ``coupled_newton(load, info)`` from the current iterate after that many passes, then after
+    twice as many passes each time, and stops when it converges (the fallback of the monolithic
+    scheme). ``predicted``: u holds the secant predictor
+    (:meth:`StepSchemes._predict_displacement`) for the first pass's Newton. The history is not
+    committed: ``info["H_trial"]`` holds the trial history for ``s.update_history``. Returns
+    (ok, info dict)."""
+    info = info if info is not None else {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
+    info.update(staggered_iterations=0, projected=0)
+    H_trial = s.H_committed
+    alpha_prev_pass = None
+    passes = 0
+    next_newton = newton_every
+
+    def fail(message):
+        info.update(message=message, staggered_iterations=passes)
+        return False, info
+
+    if max_passes < 1:
+        return fail("no staggered passes allowed")
+    for passes in range(1, max_passes + 1):
+        info["projected"] = s.solve_phase_field(H_trial)
+        if s.alpha is not None and alpha_prev_pass is not None:
+            change = s.ranks.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass))
+            if change <= staggered_tol:
+                # alpha from the latest H agrees with the one u is in equilibrium with: keep u
+                s.alpha.vec.FV().NumPy()[:] = alpha_prev_pass
+                passes -= 1
+                break
+        res = s.solve_displacement(load, predicted=predicted and passes == 1)
+        _add(info, res)
+        if not res.converged:
+            return fail(res.message)
+        if s.alpha is None:
+            break  # nothing may break: no history to keep
+        H_trial = s.trial_history()
+        if not s.ranks.all_finite(H_trial):
+            return fail("history not finite (J <= 0 at a history point)")
+        if max_passes == 1:
+            break
+        if newton_every and passes >= next_newton:
+            next_newton = 2 * passes  # retries at 10, 20, 40, ... passes
+            ok, _ = coupled_newton(load, info)
+            if ok:
+                info["staggered_iterations"] = passes
+                return True, info
+        alpha_prev_pass = s.alpha.vec.FV().NumPy().copy()
+    else:
+        if max_passes > 1 and s.alpha is not None:
+            return fail(f"staggered passes did not converge in {max_passes}")
+    info.update(staggered_iterations=max(passes, 1), H_trial=H_trial)
+    return True, info
+
+
+def _add(info: dict, res):
+    """Add a Newton result's iterations and times to a step's ``info``."""
+    info["newton_iterations"] += res.iterations
+    info["solve_time"] += res.solve_time
+    info["assembly_time"] += res.assembly_time
+
+
 class StepSchemes:
     """The solution scheme of a run's load steps (a base of :class:`ngtmc.simulation.Simulation`,
     whose docstring lists the options). Needs ``self.solver`` (:class:`ngtmc.solver.Solver`) and
     ``self.schedule`` before :meth:`_init_scheme`."""
+
+    _add = staticmethod(_add)
 
     @staticmethod
     def _check_scheme(scheme: str, staggered_tol: float):
@@ -147,72 +217,17 @@ class StepSchemes:
 
     def _passes(self, load: float, max_passes: int, info: dict | None = None, newton_every: int = 0,
                 predicted: bool = False):
-        """alpha-u-H passes at a fixed load (Sect. 4 of MODEL.md): alpha from the latest history,
-        Newton for u, history. One pass is the paper's scheme; several, until alpha changes by
-        less than ``staggered_tol``, the converged staggered scheme. ``newton_every`` > 0 tries the
-        coupled Newton from the current iterate after that many passes, then after twice as many
-        passes each time, and stops when it converges (the fallback of the monolithic scheme).
-        ``predicted``: u holds the secant predictor (:meth:`_predict_displacement`) for the first
-        pass's Newton. Returns (ok, info dict)."""
-        s = self.solver
-        info = info if info is not None else {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
-        info.update(staggered_iterations=0, projected=0)
-        H_trial = s.H_committed
-        alpha_prev_pass = None
-        passes = 0
-        next_newton = newton_every
-
-        def fail(message):
-            info.update(message=message, staggered_iterations=passes)
-            return False, info
-
-        if max_passes < 1:
-            return fail("no staggered passes allowed")
-        for passes in range(1, max_passes + 1):
-            info["projected"] = s.solve_phase_field(H_trial)
-            if s.alpha is not None and alpha_prev_pass is not None:
-                change = s.ranks.max(np.abs(s.alpha.vec.FV().NumPy() - alpha_prev_pass))
-                if change <= self.staggered_tol:
-                    # alpha from the latest H agrees with the one u is in equilibrium with: keep u
-                    s.alpha.vec.FV().NumPy()[:] = alpha_prev_pass
-                    passes -= 1
-                    break
-            res = s.solve_displacement(load, predicted=predicted and passes == 1)
-            self._add(info, res)
-            if not res.converged:
-                return fail(res.message)
-            if s.alpha is None:
-                break  # nothing may break: no history to keep
-            H_trial = s.trial_history()
-            if not s.ranks.all_finite(H_trial):
-                return fail("history not finite (J <= 0 at a history point)")
-            if max_passes == 1:
-                break
-            if newton_every and passes >= next_newton:
-                next_newton = 2 * passes  # retries at 10, 20, 40, ... passes
-                ok, _ = self._coupled_newton(load, info)
-                if ok:
-                    info["staggered_iterations"] = passes
-                    return True, info
-            alpha_prev_pass = s.alpha.vec.FV().NumPy().copy()
-        else:
-            if max_passes > 1 and s.alpha is not None:
-                return fail(f"staggered passes did not converge in {max_passes}")
-        info.update(staggered_iterations=max(passes, 1), H_trial=H_trial)
-        return True, info
-
-    @staticmethod
-    def _add(info, res):
-        info["newton_iterations"] += res.iterations
-        info["solve_time"] += res.solve_time
-        info["assembly_time"] += res.assembly_time
+        """:func:`alpha_u_passes` with this run's ``staggered_tol`` and coupled Newton."""
+        return alpha_u_passes(self.solver, load, max_passes, info, staggered_tol=self.staggered_tol,
+                              newton_every=newton_every, coupled_newton=self._coupled_newton,
+                              predicted=predicted)
 
     def _coupled_newton(self, load: float, info: dict, alpha_upper=None):
         """Coupled Newton from the current (u, alpha); on failure the iterate is restored."""
         s = self.solver
         keep = s.get_state()
         res = self.coupled.solve(load, alpha_upper)
-        self._add(info, res)
+        _add(info, res)
         if res.converged:
             s._r_valid = False
             H_trial = s.trial_history()
@@ -249,7 +264,7 @@ class StepSchemes:
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
                 "projected": 0}
         res = s.solve_displacement(load, predicted=self._predict_displacement(load))
-        self._add(info, res)
+        _add(info, res)
         if not res.converged:
             info["message"] = res.message
             return False, info

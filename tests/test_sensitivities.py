@@ -96,6 +96,7 @@ def test_replay_reproduces_the_path(path):
     r = S.replay(path)
     assert np.allclose(r.forces, path.forces, rtol=1e-9, atol=1e-12)
     assert np.allclose(r.states[-1]["alpha"], path.states[-1]["alpha"], atol=1e-10)
+    assert np.allclose(r.states[-1]["H"], path.states[-1]["H"], rtol=1e-8, atol=0)
     path.activate()
 
 

@@ -15,6 +15,7 @@ import ngsolve as ngs
 
 from ..conditions import Traction
 from ..scene import Scene
+from ..schemes import alpha_u_passes
 from ..simulation import Simulation
 from ..solver import NewtonOptions, Solver
 from ..stepping import AdaptiveStepControl, Schedule
@@ -208,15 +209,12 @@ def _capture(solver: Solver) -> dict:
 
 
 def _step(s: Solver, load: float, n: int):
-    """One step of the single-pass scheme at a fixed load (as Simulation does it)."""
-    s.solve_phase_field()
-    res = s.solve_displacement(load)
-    if not res.converged:
-        raise RuntimeError(f"replay: Newton failed at step {n} (load {load:.6g} mm): {res.message}")
-    H = s.trial_history() if s.alpha is not None else None
-    if H is not None and not np.all(np.isfinite(H)):
-        raise RuntimeError(f"replay: history not finite at step {n} (J <= 0 at a history point)")
-    s.update_history(H)
+    """One step of the single-pass scheme at a fixed load, by the runs' own
+    :func:`ngtmc.schemes.alpha_u_passes`, and its history committed."""
+    ok, info = alpha_u_passes(s, load)
+    if not ok:
+        raise RuntimeError(f"replay: step {n} (load {load:.6g} mm) failed: {info['message']}")
+    s.update_history(info["H_trial"])
 
 
 def _thin(states: list, k: int | None):
