@@ -157,4 +157,5 @@ def gc_interpolation(rho, a: float = 10.0, b: float = 100.0):
         return a / (1 + ngs.exp(b * rho)) + rho
     import numpy as np
 
-    return a / (1 + np.exp(b * np.asarray(rho, dtype=float))) + rho
+    rho = np.asarray(rho, dtype=float)
+    return a / (1 + np.exp(np.minimum(b * rho, 700.0))) + rho   # exp(700) ~ 1e304: no overflow warning

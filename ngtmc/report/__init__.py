@@ -28,8 +28,10 @@ from __future__ import annotations
 
 from .loading import (  # noqa: F401
     HISTORY_COLUMNS, load_run, _load, _case_list, _param_value, _case_rows, _find_runs)
+from ..materials import (  # noqa: F401  (Eqs. 17 and 18 under the report's names)
+    gamma_interpolation as gamma_of_rho, gc_interpolation as gc_ratio_of_rho)
 from .numbers import (  # noqa: F401
-    gamma_of_rho, gc_ratio_of_rho, _finite, fmt, fmt_u, _pct, fmt_duration, fmt_date, _rs, _UNIT_PREFIX,
+    _finite, fmt, fmt_u, _pct, fmt_duration, fmt_date, _rs, _UNIT_PREFIX,
     unit_factor, _any_positive, run_features, overrides_text, physics_key, case_numbers, _targets_for,
     key_number_rows, reference_peaks, _published_peak, speed_error_rows, TIME_SPLIT_PARTS,
     time_split_rows, _run_speed_entries)

@@ -7,7 +7,8 @@ import math
 import numpy as np
 
 from .loading import _case_rows, _param_value
-from .numbers import _finite, _rs, fmt, gamma_of_rho, gc_ratio_of_rho, unit_factor
+from ..materials import gamma_interpolation, gc_interpolation
+from .numbers import _finite, _rs, fmt, unit_factor
 
 
 #: Largest number of points drawn per history curve (longer curves are thinned, shape kept).
@@ -385,7 +386,7 @@ def _fig_interpolation(meta, cases):
             continue
         seen.add(g)
         color = CASE_COLORS[k % len(CASE_COLORS)]
-        data.append(_line(rho, gamma_of_rho(rho, g), f"γ(ρ), γ0 = {fmt(g, 3)}", color, width=2,
+        data.append(_line(rho, gamma_interpolation(rho, g), f"γ(ρ), γ0 = {fmt(g, 3)}", color, width=2,
                           legendgroup=f"g{k}"))
         data.append({"type": "scatter", "mode": "markers", "x": [0.0], "y": [float(g)],
                      "marker": {"color": color, "size": 9, "symbol": "circle-open",
@@ -396,7 +397,7 @@ def _fig_interpolation(meta, cases):
                    "pseudo-density ρ (-)", "γ(ρ) = K/K0 = G/G0 (-)", height=380)
     _log_axis(lay1["yaxis"], [1e-12, 1] if not gamma0s else [min(g for _, g in gamma0s), 1])
     _legend_below(lay1, rows=_legend_rows([t["name"] for t in data if t.get("showlegend", True)]))
-    gc = gc_ratio_of_rho(rho, a, b)
+    gc = gc_interpolation(rho, a, b)
     data2 = [_line(rho, gc, f"Gc(ρ)/Gc0, a = {fmt(a)}, b = {fmt(b)}", "#d62728", width=2.2),
              _line([0, 1], [a / 2, a / 2], f"void limit a/2 = {fmt(a / 2)}", "#777", dash="dot",
                    width=1.2)]

@@ -14,18 +14,6 @@ from ..runfiles import peak
 from .loading import _case_list, _case_rows, _param_value
 
 
-def gamma_of_rho(rho, gamma0: float = 1e-5):
-    """Stiffness interpolation gamma(rho) = gamma0 + (1 - gamma0) rho (dimensionless)."""
-    rho = np.asarray(rho, dtype=float)
-    return gamma0 + (1.0 - gamma0) * rho
-
-
-def gc_ratio_of_rho(rho, a: float = 10.0, b: float = 100.0):
-    """Fracture toughness interpolation Gc(rho)/Gc0 = a / (1 + exp(b rho)) + rho (dimensionless)."""
-    rho = np.asarray(rho, dtype=float)
-    return a / (1.0 + np.exp(np.minimum(b * rho, 700.0))) + rho
-
-
 def _finite(x) -> bool:
     try:
         return x is not None and math.isfinite(float(x))
