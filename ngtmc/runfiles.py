@@ -238,7 +238,7 @@ def parameter_table(mod, p: dict) -> dict:
 def physics_hash(mod, p: dict) -> str:
     """:func:`parameters_hash` of the physics alone (the study's PARAMETERS): runs with equal
     physics hashes differ only in resolution, and the report index compares only those."""
-    return parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p})  # (effective ones only)
+    return parameters_hash({k: p[k] for k in getattr(mod, "PARAMETERS", {}) if k in p}, mod)  # (effective ones only)
 
 
 def run_description(mod, p: dict, resolution: str | None, overrides: dict | None) -> dict:
@@ -258,7 +258,7 @@ def run_description(mod, p: dict, resolution: str | None, overrides: dict | None
         "units": dict(UNITS),
         "parameters": parameter_table(mod, p),
         "overrides": dict(overrides or {}),
-        "parameters_hash": parameters_hash(p),
+        "parameters_hash": parameters_hash(p, mod),
         "physics_hash": physics_hash(mod, p),
         "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else None,
         "process": process_info(),
@@ -266,12 +266,13 @@ def run_description(mod, p: dict, resolution: str | None, overrides: dict | None
 
 
 # ====================================================================== the physics of a run
-def parameters_hash(p: dict) -> str:
+def parameters_hash(p: dict, mod=None) -> str:
     """``"sha256:<hex>"`` of the resolved parameters ``p`` (physics, resolution and solver settings)
-    in canonical JSON: equal for equal parameters, whatever their order or their origin. Settings
-    without effect in ``p`` (:func:`ngtmc.study.effective_parameters`) are left out."""
+    of the study module ``mod`` in canonical JSON: equal for equal parameters, whatever their order
+    or their origin. Settings without effect in ``p`` (:func:`ngtmc.study.effective_parameters`,
+    which needs ``mod`` for the settings a study added later) are left out."""
     from .study import effective_parameters
-    text = json.dumps(jsonable(effective_parameters(p)), sort_keys=True, separators=(",", ":"))
+    text = json.dumps(jsonable(effective_parameters(p, mod)), sort_keys=True, separators=(",", ":"))
     return "sha256:" + hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -325,11 +326,11 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
                              "the recorded overrides, or start a new run in another folder")
     recorded = {k: v.get("value") for k, v in (meta.get("parameters") or {}).items() if isinstance(v, dict)}
     if recorded:
-        diff = _differences(effective_parameters(recorded), effective_parameters(p))
+        diff = _differences(effective_parameters(recorded, mod), effective_parameters(p, mod))
         if diff:
             raise StudyError(f"cannot resume {out}: the study {mod.NAME!r} now resolves other parameters than the "
                              f"run recorded (key: recorded -> now): {'; '.join(diff)}. Start a new run")
-    elif meta.get("parameters_hash") and meta["parameters_hash"] != parameters_hash(p):
+    elif meta.get("parameters_hash") and meta["parameters_hash"] != parameters_hash(p, mod):
         raise StudyError(f"cannot resume {out}: its parameters hash differs from this run's; start a new run")
     return res, rec_typed, p
 

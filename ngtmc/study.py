@@ -74,22 +74,36 @@ INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 
 
 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
-#: hashes and comparisons at that value, so that the runs still resume and compare.
+#: hashes and comparisons at that value, so that the runs still resume and compare. A study adds
+#: its own by naming them in a tuple ``ADDED_AT_DEFAULT`` of its module; their value is then
+#: the default of its PARAMETERS (:func:`added_at_default`).
 ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
-                    "amr_history_fraction": 1.0, "band_left": 150.0}
+                    "amr_history_fraction": 1.0}
 
 
-def effective_parameters(p: dict) -> dict:
+def added_at_default(mod=None) -> dict:
+    """:data:`ADDED_AT_DEFAULT` and, for the study module ``mod``, the parameters its
+    ``ADDED_AT_DEFAULT`` names, at their defaults in its PARAMETERS ({name: value})."""
+    out = dict(ADDED_AT_DEFAULT)
+    names = getattr(mod, "ADDED_AT_DEFAULT", ()) if mod is not None else ()
+    for name in names:
+        out[name] = mod.PARAMETERS[name][0]
+    return out
+
+
+def effective_parameters(p: dict, mod=None) -> dict:
     """``p`` without the settings that have no effect in it (:data:`INERT_WITHOUT_REFINEMENT`,
-    when ``h_crack`` is 0 or absent) and those at the value of :data:`ADDED_AT_DEFAULT`."""
+    when ``h_crack`` is 0 or absent) and those at the value of :func:`added_at_default` (of the
+    study module ``mod``, where given)."""
     try:
         off = float(p.get("h_crack", 0.0) or 0.0) == 0.0
     except (TypeError, ValueError):
         off = False
+    added = added_at_default(mod)
 
     def at_default(k, v):
         try:
-            return k in ADDED_AT_DEFAULT and float(v) == ADDED_AT_DEFAULT[k]
+            return k in added and float(v) == added[k]
         except (TypeError, ValueError):
             return False
     return {k: v for k, v in p.items() if not ((off and k in INERT_WITHOUT_REFINEMENT) or at_default(k, v))}

@@ -224,10 +224,22 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_size_tolerance"}
     assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
     assert parameters_hash(dict(p, h_crack=2.0, amr_size_tolerance=1.41)) != parameters_hash(dict(p, h_crack=2.0))
-    # an L-panel run recorded before band_left existed (the band from x = 150 mm) resumes
-    assert p["band_left"] == 150.0
-    assert parameters_hash({k: v for k, v in p.items() if k != "band_left"}) == parameters_hash(p)
-    assert parameters_hash(dict(p, band_left=100.0)) != parameters_hash(p)
+    # an L-panel run recorded before band_left existed (the band from x = 150 mm) resumes: the
+    # study names it in its ADDED_AT_DEFAULT, and its default is the one of its PARAMETERS
+    assert p["band_left"] == 150.0 == mod.PARAMETERS["band_left"][0] and "band_left" in mod.ADDED_AT_DEFAULT
+    assert parameters_hash({k: v for k, v in p.items() if k != "band_left"}, mod) == parameters_hash(p, mod)
+    assert parameters_hash(dict(p, band_left=100.0), mod) != parameters_hash(p, mod)
+    meta_old = run_description(mod, p, res, {})
+    meta_old["parameters"].pop("band_left")
+    meta_old["parameters_hash"] = parameters_hash({k: v for k, v in p.items() if k != "band_left"}, mod)
+    assert resume_parameters(meta_old, mod, None, None, tmp_path)[2] == p
+    meta_old.pop("parameters")    # only the hash recorded: it guards the resume alone
+    assert resume_parameters(meta_old, mod, None, None, tmp_path)[2] == p
+    meta_old["parameters_hash"] = parameters_hash(dict(p, band_left=100.0), mod)
+    with pytest.raises(StudyError, match="hash differs"):
+        resume_parameters(meta_old, mod, None, None, tmp_path)
+    # a study that does not name it keeps it in the hash (another study's setting)
+    assert parameters_hash({k: v for k, v in p.items() if k != "band_left"}) != parameters_hash(p)
     # and before amr_history_fraction existed (1)
     assert p["amr_history_fraction"] == 1.0
     old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_history_fraction"}

@@ -126,7 +126,7 @@ class RunFolder:
         self.t0 = time.perf_counter()
         self.wall_before = 0.0
         self.created = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-        self.hash = parameters_hash(p)
+        self.hash = parameters_hash(p, mod)
         self.store = CheckpointStore(out / "checkpoint")
 
     # ------------------------------------------------------------ files
