@@ -86,8 +86,12 @@ class Snapshots:
         """The snapshots were taken on more than one mesh."""
         return len(self.meshes) > 1
 
-    def restore(self, data: dict):
-        """Take the snapshots of :meth:`state` (from a checkpoint)."""
+    def restore(self, data: dict, recorded: dict | None = None):
+        """Take the snapshots of :meth:`state` (from a checkpoint). ``recorded``: the checkpoint's
+        copy of :meth:`arrays` (keys without the ``snaparr__`` prefix), whose mesh is taken where
+        a checkpoint of the short format holds snapshots of another mesh than the solver's now
+        (written by a version before 2026-12-05, after a refinement, while every snapshot lay on
+        the mesh before it). Raises ValueError where no recorded mesh fits them."""
         self.loads = list(np.asarray(data["loads"], dtype=float))
         self.steps = list(np.asarray(data["steps"], dtype=int))
         self.pending = [int(i) for i in np.asarray(data["pending"], dtype=int)]
@@ -101,10 +105,24 @@ class Snapshots:
         else:
             self.u = list(np.asarray(data["u"], dtype=float))
             self.alpha = list(np.asarray(data["alpha"], dtype=float))
-            self.meshes = [self.current_mesh()] if k else []
+            self.meshes = [self._mesh_of_short_format(recorded)] if k else []
             self.mesh_of = [0] * k
         if "section_alpha" in data:
             self.section = list(np.asarray(data["section_alpha"], dtype=float))
+
+    def _mesh_of_short_format(self, recorded: dict | None) -> dict:
+        """The mesh of snapshots restored from the short format (:meth:`restore`): the solver's,
+        or, where their number of vertices is not the solver's, the recorded one that fits."""
+        mesh = self.current_mesh()
+        nv = len(self.alpha[0])
+        if nv == len(mesh["vertices"]):
+            return mesh
+        keys = {f: f"{self.case.name}__{f}" for f in ("vertices", "triangles", "rho")}
+        if recorded and all(v in recorded for v in keys.values()) and len(recorded[keys["vertices"]]) == nv:
+            return {f: np.asarray(recorded[v]) for f, v in keys.items()}
+        raise ValueError(f"case {self.case.name!r}: the checkpoint's snapshots lie on a mesh of {nv} vertices, the "
+                         f"run's mesh now has {len(mesh['vertices'])}, and the checkpoint keeps no drawing of "
+                         "theirs; start a new run")
 
     def state(self) -> dict:
         """Arrays of the snapshots taken so far (for a checkpoint; :meth:`restore` reads them)."""

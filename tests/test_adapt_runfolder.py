@@ -136,6 +136,52 @@ def test_resume_after_a_refinement_with_the_snapshots_on_an_earlier_mesh(tmp_pat
         np.testing.assert_allclose(z[k], z_ref[k], rtol=1e-9, atol=1e-12, err_msg=k)
 
 
+def _short_format(npz):
+    """Rewrite a checkpoint's snapshots (on one mesh) in the short format of the versions before
+    2026-12-05, which kept no mesh of theirs (the solver's was taken on resuming)."""
+    d = dict(np.load(npz))
+    k = len(d["snap__loads"])
+    assert set(d["snap__mesh_of"]) == {0}
+    d["snap__u"] = np.stack([d.pop(f"snap__u__{i}") for i in range(k)])
+    d["snap__alpha"] = np.stack([d.pop(f"snap__alpha__{i}") for i in range(k)])
+    for key in [key for key in d if key.startswith(("snap__mesh_of", "snap__vertices__", "snap__triangles__",
+                                                    "snap__rho__"))]:
+        del d[key]
+    np.savez(npz, **d)
+
+
+def test_resume_of_an_old_checkpoint_with_the_snapshots_on_an_earlier_mesh(tmp_path):
+    """A checkpoint written before 2026-12-05 after a refinement, while every snapshot lay on the
+    mesh before it, kept no mesh of the snapshots: resuming put them on the refined mesh and failed
+    at the next checkpoint ("cannot reshape array", a medium L-panel run). The mesh is now taken
+    from the checkpoint's copy of the snapshot arrays, and the run ends as the uninterrupted one;
+    without that copy the resume stops at once with a clear message."""
+    one = {"snapshot_loads": [0.002]}
+    ref = _run(tmp_path / "ref", **one).history
+    refined = [int(i) for i in ref.index[1:] if ref["elements"][i] > ref["elements"][i - 1]]
+    stop_step = next(i for i in refined if ref["load"][i - 1] >= 0.002)
+
+    def stop(sim, row):
+        if row["step"] == stop_step:
+            raise KeyboardInterrupt
+
+    for name in ("run", "bare"):
+        with pytest.raises(KeyboardInterrupt):
+            _run(tmp_path / name, callbacks=[stop], **one)
+        for f in (tmp_path / name / "checkpoint").glob("*.npz"):
+            _short_format(f)
+    h = _run(tmp_path / "run", resume=True, **one).history
+    assert len(h) == len(ref)
+    z, z_ref = np.load(tmp_path / "run" / "snapshots.npz"), np.load(tmp_path / "ref" / "snapshots.npz")
+    assert sorted(z.files) == sorted(z_ref.files)
+    for k in z.files:
+        np.testing.assert_allclose(z[k], z_ref[k], rtol=1e-9, atol=1e-12, err_msg=k)
+    for f in (tmp_path / "bare" / "checkpoint").glob("*.npz"):
+        np.savez(f, **{k: v for k, v in np.load(f).items() if not k.startswith("snaparr__")})
+    with pytest.raises(ValueError, match=r"snapshots lie on a mesh of \d+ vertices.*start a new run"):
+        _run(tmp_path / "bare", resume=True, **one)
+
+
 def test_state_of_a_refined_run_needs_adapt():
     """A state on a refined mesh, set on a simulation without adaptive refinement, is refused."""
     sim = ngtmc.Simulation(_scene(), SCHEDULE, CONTROL, compile=True, adapt=ADAPT)

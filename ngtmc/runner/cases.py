@@ -211,7 +211,7 @@ class _Run(RunFolder):
         if ck is not None:
             sim.set_state(ck["state"])
             if ck["snap"]:
-                snaps.restore(ck["snap"])
+                snaps.restore(ck["snap"], recorded=ck["snaparr"])
                 snaps.write_pvd()
             self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: resuming from step {sim.step} "
                               f"(load {sim.solver.load:.6g} mm)")
