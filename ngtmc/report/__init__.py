@@ -13,7 +13,7 @@ Units follow the run directory: lengths and displacements in mm, forces in the u
 ``metadata["force_unit"]`` (N/mm per thickness in 2D), energies in N mm, times in s.
 
 Modules: :mod:`.loading` (reading a run folder), :mod:`.numbers` (formatting with units,
-features, key numbers, speed against error), :mod:`.figures` (plotly figures and mesh payloads),
+features, key numbers, speed against error), :mod:`.figures` (plotly figures; their look in :mod:`.plot_style`),
 :mod:`.page` (``report.html``), :mod:`.index` (``index.html``), :mod:`.command` (``python -m
 ngtmc.report``). Every name is importable from ``ngtmc.report`` as before.
 
@@ -35,11 +35,11 @@ from .numbers import (  # noqa: F401
     unit_factor, _any_positive, run_features, overrides_text, physics_key, case_numbers, _targets_for,
     key_number_rows, reference_peaks, _published_peak, speed_error_rows, TIME_SPLIT_PARTS,
     time_split_rows, _run_speed_entries)
+from .plot_style import (  # noqa: F401
+    MAX_POINTS, CASE_COLORS, REF_COLORS, ALPHA_COLORSCALE, RHO_COLORSCALE, FONT, _case_style, _axis, _layout, decimate,
+    _legend_rows, _legend_below, _log_axis, _line, _log_toggle)
 from .figures import (  # noqa: F401
-    MAX_POINTS, CASE_COLORS, REF_COLORS,
-    ALPHA_COLORSCALE, RHO_COLORSCALE, FONT, _case_style, _axis, _layout, decimate, _legend_rows,
-    _legend_below, _log_axis, _line, _log_toggle, _fig_force, _fig_step_size, _fig_wf_alpha, _fig_newton,
-    _fig_energies, _fig_interpolation, _fig_speed_error)
+    _fig_force, _fig_step_size, _fig_wf_alpha, _fig_newton, _fig_energies, _fig_interpolation, _fig_speed_error)
 from .mesh_frames import (  # noqa: F401
     MAX_FRAMES, MAX_VERTEX_FRAMES, MAX_EDGE_TRIANGLES, N_LEVELS, _nice_scale, deformation_scale, _frame_indices,
     mesh_payload, _same_mesh, _level_colors)

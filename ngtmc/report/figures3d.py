@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .figures import ALPHA_COLORSCALE, _font, _title
+from .plot_style import ALPHA_COLORSCALE, _font, _title
 from .mesh_frames import MAX_FRAMES, _frame_indices, deformation_scale
 from .numbers import fmt
 
