@@ -289,6 +289,10 @@ def _check_study(mod: ModuleType, where: str):
     missing = [a for a in ("NAME", "PARAMETERS", "RESOLUTIONS", "cases") if not hasattr(mod, a)]
     if missing:
         raise StudyError(f"study module {where} lacks {', '.join(missing)} (see docs/study-interface.md)")
+    unknown = [n for n in getattr(mod, "ADDED_AT_DEFAULT", ()) if n not in mod.PARAMETERS]
+    if isinstance(getattr(mod, "ADDED_AT_DEFAULT", ()), str) or unknown:
+        raise StudyError(f"study module {where}: ADDED_AT_DEFAULT must be a tuple of names of its PARAMETERS; "
+                         f"not parameters: {unknown or mod.ADDED_AT_DEFAULT!r}")
 
 
 def load_study(name: str) -> ModuleType:

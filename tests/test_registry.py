@@ -102,3 +102,18 @@ def test_list_into_a_closed_pipe_is_quiet():
                        timeout=120)
     assert p.stdout.count("\n") == 1 and "cannot be loaded" not in p.stdout
     assert "Traceback" not in p.stderr and "BrokenPipe" not in p.stderr
+
+
+@pytest.mark.parametrize("added, message", [(("E", "nosuch"), r"not parameters: \['nosuch'\]"),
+                                            ("E", r"must be a tuple of names")])
+def test_added_at_default_names_the_studys_parameters(tmp_path, added, message):
+    """A study's ADDED_AT_DEFAULT (docs/study-interface.md) names parameters of its PARAMETERS;
+    a misspelt name, or a string instead of a tuple, is refused when the study is loaded."""
+    f = tmp_path / "bad_added.py"
+    f.write_text(_STUDY + f"\nADDED_AT_DEFAULT = {added!r}\n")
+    with pytest.raises(StudyError, match=message):
+        load_study(str(f))
+    f.write_text(_STUDY + "\nADDED_AT_DEFAULT = ('E',)\n")
+    mod = load_study(str(f))
+    from ngtmc.study import added_at_default
+    assert added_at_default(mod)["E"] == 1000.0
