@@ -266,6 +266,24 @@ def test_reload_peak_set_by_the_band_end_record():
     assert point["x"] == [1.1875] and point["y"] == [wide["reload_peak_force"]]
 
 
+def test_a_crack_free_to_run_passes_the_band_ends_record():
+    """The recorded (unfinished) medium run with the band over the whole arm: the same first
+    loading as the 100 mm band's, and before the turning point (6.3 mm) its crack passes both band
+    ends (x = 150 and 100 mm) while the load stays below 6.3 mm, the force falling below the 100 mm
+    band's reload peak: a crack resolved wherever it runs does not stop at l0 = 1.1875 mm, so the
+    study's reload peaks are bounds set by the band (docstring, "The refined band's end sets it")."""
+    wide = S.MEASURED["medium_path_following_band_left_100_2026_12_05"]
+    free = S.MEASURED["medium_path_following_band_left_0_2026_12_05"]
+    assert free["band_left"] == 0.0 and free["status"] == "unfinished"
+    assert free["first_loading_peak_force"] == pytest.approx(wide["first_loading_peak_force"], rel=2e-3)
+    track = free["crack_track"]
+    steps, loads, forces, xs = ([r[i] for r in track] for i in (0, 1, 2, 4))
+    assert steps == sorted(steps) and all(x1 <= x0 for x0, x1 in zip(xs, xs[1:]))   # the crack only grows
+    assert max(loads) < 6.3 and xs[-1] < wide["crack_x_at_turning_point"] - 50.0
+    past_100 = [f for f, x in zip(forces, xs) if x < 100.0]
+    assert past_100 and max(past_100) < wide["reload_peak_force"]
+
+
 # the published reload peak (strict xfail, with the measured values) and the measured quick values
 # (regression guard, 5 %): the study's EXPECTED
 test_expected = expected_test(S)
