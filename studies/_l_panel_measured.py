@@ -227,17 +227,26 @@ MEASURED = {
         "reload_peak_load": 6.9255, "final_force": 4274, "final_wf": 7013.9},
     "medium_path_following_band_left_0_2026_12_05": {
         "note": "the run of medium_path_following_paper_schedule_2026_12_03 with --set band_left=0 (the refined band "
-                "over the whole arm, x from 0 to 260 mm), one thread; NOT FINISHED: stopped for time at step 380, "
-                "before the turning point (resumable with --resume). crack_track: (step, load, force, dissipated, "
-                "smallest x with alpha > 0.9) read from the checkpoint during the run",
-        "band_left": 0.0, "elements": 60268, "ndof_u": 60582, "ndof_alpha": 30291, "status": "unfinished",
+                "over the whole arm, x from 0 to 260 mm), one thread, stopped and resumed three times (wall_time_s "
+                "is its clock, pauses for CI runs included): the crack runs through the arm before the turning "
+                "point; on reloading the force only creeps up, no peak by 7 mm (reload_peak_force None, "
+                "reload_largest_force at the end). crack_track: (step, load, force, dissipated, smallest x with "
+                "alpha > 0.9) read from the checkpoint during the run (steps 421 and 429 from the snapshots)",
+        "band_left": 0.0, "elements": 60268, "ndof_u": 60582, "ndof_alpha": 30291, "status": "finished",
+        "steps": 429, "newton_iterations": 2037, "cutbacks": 30, "wall_time_s": 13640,
         "first_loading_peak_force": 16822, "first_loading_peak_load": 6.2736,
-        "steps_so_far": 380, "newton_iterations_so_far": 1792, "cutbacks_so_far": 28,
+        "snap_back_lowest_load": 5.3109, "snap_back_lowest_load_step": 411,
+        "force_at_turning_point": 98.8, "wf_at_turning_point": 7052.7, "dissipated_at_turning_point": 3526.3,
+        "crack_x_at_turning_point": 4.3, "crack_x_at_7": 3.5,
+        "unload_wf_growth": 0.0, "force_unloaded_at_gap": 94.9, "reload_peak_force": None,
+        "reload_largest_force": 100.75, "reload_largest_force_load": 7.0, "final_wf": 7077.8,
         "crack_track": [(80, 6.2632, 14857, None, 238.2), (143, 6.2455, 10645, 785.5, 205.4),
                         (170, 6.2463, 9860, 920.7, 196.0), (187, 6.2500, 9277, 1037.4, 188.0),
                         (237, 6.2459, 8091, 1225.6, 175.0), (273, 6.2459, 6334, 1546.4, 151.5),
                         (298, 6.2506, 4331, 1960.0, 120.5), (317, 6.2565, 2870, 2320.5, 93.5),
-                        (363, 6.1925, 943, 2935.6, 46.5), (380, 6.0974, 571, 3115.8, 32.9)]},
+                        (363, 6.1925, 943, 2935.6, 46.5), (380, 6.0974, 571, 3115.8, 32.9),
+                        (397, 5.7552, 281, 3296.1, 20.8), (421, 6.3000, 98.8, 3526.3, 4.3),
+                        (429, 7.0000, 100.75, 3538.9, 3.5)]},
     "quick_unload_monolithic": {"note": "the same with --set scheme=monolithic", "steps": 153,
                                 "newton_iterations": 486, "wall_time_s": 84, "force_at_turning_point": 17908,
                                 "wf_at_turning_point": 70.76, "unload_wf_lag": 0.0, "max_alpha_at_turning_point": 0.4827,

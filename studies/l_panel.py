@@ -310,14 +310,17 @@ Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
   comes from their common band, and the l0 sweep above is conditional on it too. 357 steps, 1561
   Newton iterations, 22 cut-backs, 5976 s.
   **With the band over the whole arm** (``--set band_left=0``, 60268 elements;
-  ``MEASURED["medium_path_following_band_left_0_2026_12_05"]``, measured 2026-12-05, not finished)
-  the first loading is the same (16.82 kN at 6.274 mm), and the crack does not stop: it passes
-  x = 150 mm at 6.246 mm (6.3 kN), x = 100 mm at about 6.256 mm (2.9 kN), and then the load
-  snaps back while it runs on, to x = 32.9 mm at 6.097 mm and 0.57 kN (3116 N mm dissipated;
-  step 380, where the run was stopped for time, before the turning point). So at l0 = 1.1875 mm,
-  with the crack resolved wherever it runs, the arm breaks almost through before 6.3 mm, and the
-  reload peak will lie below the 4.34 kN of the 100 mm band, not near the paper's 7.6 kN. The
-  run continues with ``--resume``; its reload peak is not measured yet.
+  ``MEASURED["medium_path_following_band_left_0_2026_12_05"]``, measured 2026-12-05) the first
+  loading is the same (16.82 kN at 6.274 mm), and the crack does not stop: it passes x = 150 mm
+  at 6.246 mm (6.3 kN) and x = 100 mm at about 6.256 mm (2.9 kN), then the load snaps back while
+  it runs on (x = 32.9 mm at 6.097 mm and 0.57 kN, 20.8 mm at 5.755 mm and 0.28 kN), down to
+  5.311 mm, and rises again with the arm broken: at the turning point the crack reaches x = 4.3
+  mm of the arm's 250 mm, 98.8 N are left (3526 N mm dissipated), and on reloading the force only
+  creeps up, to 100.8 N at 7 mm (x = 3.5 mm): **no reload peak**. So at l0 = 1.1875 mm, with the
+  crack resolved wherever it runs, the arm breaks through before 6.3 mm, and every reload peak
+  of the study (8.68 kN at medium, 8.83 kN at the paper's resolution, 4.34 kN with the band from
+  x = 100 mm) is the restart of a crack that the band's end arrested. 429 steps, 2037 Newton
+  iterations, 30 cut-backs, 13640 s on its clock (stopped and resumed three times).
 * At the paper's resolution the reload peak is 28.6 % above the force at the turning point (8.83
   against 6.87 kN; 25.0 % at medium with the same schedule; at quick and medium with the turning
   point at 6.6 mm, 5.1 % and 0.3 %): there the crack had arrested by 6.3 mm and restarts at
@@ -739,8 +742,8 @@ EXPECTED = {
                  "at medium reloads to 8.68 kN, against 8.83 kN at the paper's resolution), the refined band's "
                  "extent does: the crack stops at the band's end (x = 150 mm) by the turning point, and with the "
                  "band from x = 100 mm it stops there and reloads to 4.34 kN (-43 %; medium, 2026-12-05); with "
-                 "the band over the whole arm the crack runs to x = 32.9 mm before 6.3 mm (0.57 kN; medium, "
-                 "unfinished, 2026-12-05)"},
+                 "the band over the whole arm the crack runs through the arm (to x = 4.3 of 250 mm) before 6.3 mm, "
+                 "with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; medium, 2026-12-05)"},
     "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
                          "source": "measured, quick (regression guard; the turning point, 6.3 mm)"},
     "reload_peak_force": {"case": "main", "quantity": "reload_peak_force", "value": 23621.0, "unit": "N", "rel": 0.05,

@@ -266,22 +266,28 @@ def test_reload_peak_set_by_the_band_end_record():
     assert point["x"] == [1.1875] and point["y"] == [wide["reload_peak_force"]]
 
 
-def test_a_crack_free_to_run_passes_the_band_ends_record():
-    """The recorded (unfinished) medium run with the band over the whole arm: the same first
-    loading as the 100 mm band's, and before the turning point (6.3 mm) its crack passes both band
-    ends (x = 150 and 100 mm) while the load stays below 6.3 mm, the force falling below the 100 mm
+def test_a_crack_free_to_run_breaks_the_arm_record():
+    """The recorded medium run with the band over the whole arm: the same first loading as the
+    100 mm band's; before the turning point (6.3 mm) its crack passes both band ends (x = 150 and
+    100 mm) while the load stays below 6.3 mm, and by the turning point it has run through the
+    arm (x = 250 -> 4.3 mm), so reloading finds no peak, only a force below 3 % of the 100 mm
     band's reload peak: a crack resolved wherever it runs does not stop at l0 = 1.1875 mm, so the
     study's reload peaks are bounds set by the band (docstring, "The refined band's end sets it")."""
     wide = S.MEASURED["medium_path_following_band_left_100_2026_12_05"]
     free = S.MEASURED["medium_path_following_band_left_0_2026_12_05"]
-    assert free["band_left"] == 0.0 and free["status"] == "unfinished"
+    assert free["band_left"] == 0.0 and free["status"] == "finished"
     assert free["first_loading_peak_force"] == pytest.approx(wide["first_loading_peak_force"], rel=2e-3)
     track = free["crack_track"]
     steps, loads, forces, xs = ([r[i] for r in track] for i in (0, 1, 2, 4))
     assert steps == sorted(steps) and all(x1 <= x0 for x0, x1 in zip(xs, xs[1:]))   # the crack only grows
-    assert max(loads) < 6.3 and xs[-1] < wide["crack_x_at_turning_point"] - 50.0
-    past_100 = [f for f, x in zip(forces, xs) if x < 100.0]
+    before = [i for i, s in enumerate(steps) if s < 421]   # step 421: the turning point
+    assert max(loads[i] for i in before) < 6.3 and xs[before[-1]] < wide["crack_x_at_turning_point"] - 50.0
+    past_100 = [forces[i] for i in before if xs[i] < 100.0]
     assert past_100 and max(past_100) < wide["reload_peak_force"]
+    assert free["crack_x_at_turning_point"] < 0.05 * 250.0   # through the 250 mm arm, to within 5 %
+    assert free["reload_peak_force"] is None
+    assert free["reload_largest_force"] < 0.03 * wide["reload_peak_force"]
+    assert free["unload_wf_growth"] == 0.0 and free["dissipated_at_turning_point"] > wide["dissipated_at_turning_point"]
 
 
 # the published reload peak (strict xfail, with the measured values) and the measured quick values
