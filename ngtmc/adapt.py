@@ -30,7 +30,8 @@ from the state before the step.
 ``Adaptivity(remesh_maxh=...)`` refines by meshing the geometry again instead of bisecting
 (:mod:`ngtmc.remesh`, generated element shapes, the state carried across non-nested meshes).
 
-Limits of this phase: 2D triangles only (``hoprolongation`` is for triangles); the adjoint of
+Limits of this phase: triangles (2D) and tetrahedra (3D) by bisection, whose ``hoprolongation``
+is exact; remeshing is 2D only; no prisms (an extruded slab); the adjoint of
 :mod:`ngtmc.sensitivities` refuses a run whose mesh changed.
 
 The bisection and the transfer of the state to the refined mesh live in :mod:`ngtmc.bisection`.
@@ -48,6 +49,7 @@ import numpy as np
 import ngsolve as ngs
 
 from .materials import check_number
+from .scene import element_vertices
 
 __all__ = ["Adaptivity", "mark", "targets", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
 
@@ -168,14 +170,20 @@ def private_scene(scene):
     return dataclasses.replace(scene, mesh=copy, density=density)
 
 
-def check_solver(solver):
-    """ValueError when the solver's scene cannot be refined by this module (3D, quadrilaterals)."""
+def check_solver(solver, remesh: bool = False):
+    """ValueError when the solver's scene cannot be refined by this module: bisection needs
+    triangles (2D) or tetrahedra (3D), whose high-order prolongation (``hoprolongation``) is exact
+    (tests/test_adapt.py, tests/test_adapt_3d.py); remeshing (``remesh``, :mod:`ngtmc.remesh`) is
+    2D only."""
     mesh = solver.mesh
-    if mesh.dim != 2:
-        raise ValueError("adaptive refinement (Adaptivity) is implemented for 2D meshes only so far")
-    if any(el.type != ngs.ET.TRIG for el in mesh.Elements(ngs.VOL)):
-        raise ValueError("adaptive refinement (Adaptivity) needs a mesh of triangles (bisection, exact "
-                         "high-order prolongation)")
+    if remesh and mesh.dim != 2:
+        raise ValueError("refinement by remeshing (Adaptivity remesh_maxh) is implemented for 2D meshes only; "
+                         "a 3D mesh of tetrahedra is refined by bisection (remesh_maxh=None)")
+    kind = {2: ngs.ET.TRIG, 3: ngs.ET.TET}.get(mesh.dim)
+    if kind is None or any(el.type != kind for el in mesh.Elements(ngs.VOL)):
+        raise ValueError("adaptive refinement (Adaptivity) needs a mesh of triangles (2D) or tetrahedra (3D) "
+                         "(bisection, exact high-order prolongation); an extruded slab of prisms cannot be "
+                         "refined: refine its 2D twin")
 
 
 def _per_element(values: np.ndarray, ne: int) -> np.ndarray:
@@ -199,17 +207,18 @@ def _element_regions(solver) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _element_nodes(mesh) -> np.ndarray:
-    """Vertex numbers (0-based) of every triangle, in the order of the elements' numbers."""
-    return mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    """Vertex numbers (0-based) of every triangle (2D) or tetrahedron (3D), in the order of the
+    elements' numbers."""
+    return element_vertices(mesh)
 
 
 def _coordinates(mesh) -> np.ndarray:
-    """Vertex coordinates (x, y), mm."""
-    return np.asarray(mesh.ngmesh.Coordinates())[:, :2]
+    """Vertex coordinates, (nv, dim), mm."""
+    return np.asarray(mesh.ngmesh.Coordinates())[:, :mesh.dim]
 
 
 def _centroids(mesh) -> np.ndarray:
-    """Centroid (x, y) of every triangle, mm."""
+    """Centroid of every element, (ne, dim), mm."""
     return _coordinates(mesh)[_element_nodes(mesh)].mean(axis=1)
 
 

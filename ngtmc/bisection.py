@@ -6,7 +6,7 @@ and carries its state over:
 
 * u: exactly. NGSolve's prolongation of a space with per-node orders is not exact for order 2
   (only the vertex part is; 0.026 error on a quadratic field, measured), so u is carried through
-  a uniform-order space with ``hoprolongation=True`` (exact on triangles) and set back;
+  a uniform-order space with ``hoprolongation=True`` (exact on triangles and tetrahedra) and set back;
 * alpha (P1) by NGSolve's prolongation, exact: a bisection puts the new vertex at an edge midpoint
   where the P1 field is the mean of the edge's ends (on a curved boundary the new vertex is moved
   onto the geometry and keeps that value);

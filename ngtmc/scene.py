@@ -34,6 +34,16 @@ class ResolutionWarning(UserWarning):
     """The mesh does not resolve the phase-field length scale where fracture may happen."""
 
 
+def element_vertices(mesh) -> np.ndarray:
+    """Vertex numbers (0-based, NGSolve's) of every volume element of ``mesh``, in the order of
+    the elements' numbers: array (mesh.ne, 3) of triangles in 2D, (mesh.ne, 4) of tetrahedra in
+    3D (the first four vertices of other 3D elements)."""
+    ng = mesh.ngmesh
+    if mesh.dim == 2:
+        return ng.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    return ng.Elements3D().NumPy()["nodes"][:, :4].astype(int) - 1
+
+
 @dataclass(frozen=True)
 class Regulariser:
     """Hessian regularisation of the third medium (Eq. 3) on the named regions.
@@ -235,12 +245,8 @@ class Scene:
         raise KeyError(region)
 
     def element_vertices(self) -> np.ndarray:
-        """Vertex numbers (0-based, NGSolve's) of every element: array (mesh.ne, 3) in 2D,
-        (mesh.ne, 4) in 3D."""
-        ng = self.mesh.ngmesh
-        if self.mesh.dim == 2:
-            return ng.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
-        return ng.Elements3D().NumPy()["nodes"][:, :4].astype(int) - 1
+        """Vertex numbers (0-based, NGSolve's) of every element (:func:`element_vertices`)."""
+        return element_vertices(self.mesh)
 
     def element_sizes(self) -> np.ndarray:
         """Longest edge of every element, mm (array of length mesh.ne)."""

@@ -314,12 +314,16 @@ def check_parameters(p: dict):
     if p.get("sphere_symmetry", "quarter") not in ("half", "quarter"):
         raise StudyError(f"three_point_bending_3d: sphere_symmetry = {p.get('sphere_symmetry')!r} is not 'half' "
                          "or 'quarter'")
-    if float(p.get("h_crack", 0.0) or 0.0) > 0:
-        # refused before any case runs: the 2D twin alone would refine, and the slab and the
-        # hemisphere would then fail (ngtmc.adapt.check_solver)
+    if float(p.get("h_crack", 0.0) or 0.0) > 0 and p.get("parts", "all") != "hemisphere":
+        # refused before any case runs: the 2D twin alone would refine, and the slab (prisms)
+        # would then fail (ngtmc.adapt.check_solver)
         raise StudyError(f"three_point_bending_3d: h_crack = {p['h_crack']!r} mm asks for adaptive refinement, which "
-                         "is implemented for 2D meshes only; the slab and the hemisphere are 3D. For a remeshed or "
-                         "refined three-point bending run the 2D study: ngtmc run three-point-bending --set h_crack=...")
+                         "bisects triangles and tetrahedra: the hemisphere's mesh, not the slab's one layer of "
+                         "prisms. Run --set parts=hemisphere with h_crack, and for a refined slab its 2D twin: "
+                         "ngtmc run three-point-bending --set h_crack=...")
+    if float(p.get("amr_remesh_maxh", 0.0) or 0.0) > 0:
+        raise StudyError("three_point_bending_3d: amr_remesh_maxh > 0 asks for refinement by remeshing, which is "
+                         "2D only; the hemisphere is refined by bisection (amr_remesh_maxh = 0)")
     if not float(p["slab_thickness"]) > 0:
         raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm must be > 0")
     try:

@@ -27,9 +27,16 @@ def test_the_study_is_registered_and_refuses_bad_parts():
     _, p = study_parameters(study, "quick", {"sphere_radius": 0.6})
     with pytest.raises(StudyError, match="sphere_radius"):
         study.cases(p)
-    _, p = study_parameters(study, "quick", {"h_crack": 0.01})   # 2D only: refused before any case runs
-    with pytest.raises(StudyError, match="h_crack.*2D meshes only"):
+    for parts in ("all", "slab"):   # the slab's prisms cannot be bisected: refused before any case runs
+        _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": parts})
+        with pytest.raises(StudyError, match="h_crack.*prisms.*parts=hemisphere"):
+            study.cases(p)
+    _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": "hemisphere", "amr_remesh_maxh": 0.5})
+    with pytest.raises(StudyError, match="remeshing.*2D only"):
         study.cases(p)
+    _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": "hemisphere"})
+    (case,) = study.cases(p)
+    assert case.options["adapt"].h_crack == 0.01 and case.options["adapt"].remesh_maxh is None
 
 
 def test_cases_follow_parts():

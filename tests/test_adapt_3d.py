@@ -1,0 +1,193 @@
+"""Adaptive refinement of tetrahedral meshes (ngtmc.adapt, ngtmc.bisection in 3D): the transfer
+loses nothing (H and alpha never decrease), reproduces a homogeneous state and an order-2 field
+exactly, keeps a curved boundary curved, and the re-solved steps converge and agree with a mesh
+refined beforehand; prisms and 3D remeshing are refused."""
+import dataclasses
+
+import numpy as np
+import ngsolve as ngs
+import pytest
+from netgen.occ import Box, OCCGeometry, Pnt, Sphere, X, Y, Z
+
+import ngtmc
+from ngtmc import adapt
+from ngtmc.adapt import Adaptivity
+from ngtmc.displacement_newton import DISPLACEMENT_RTOL
+
+
+def _block_mesh(maxh=0.25, notch=0.3, thickness=0.2):
+    """Block [0, 1] x [0, 1] x [0, thickness] (mm) with a slit from the left face to x = notch at
+    y = 0.5 (through the thickness, 0.01 wide; None: no slit); faces bottom, top, left, right,
+    back (z = 0)."""
+    body = Box(Pnt(0, 0, 0), Pnt(1, 1, thickness))
+    if notch is not None:
+        body = body - Box(Pnt(-0.01, 0.495, -0.01), Pnt(notch, 0.505, thickness + 0.01))
+    body.solids.name = "block"
+    body.faces.Min(Y).name = "bottom"
+    body.faces.Max(Y).name = "top"
+    body.faces.Min(X).name = "left"
+    body.faces.Max(X).name = "right"
+    body.faces.Min(Z).name = "back"
+    return ngs.Mesh(OCCGeometry(body).GenerateMesh(maxh=maxh))
+
+
+def notched_block(maxh=0.25, l0=0.1, thickness=0.2, **kw):
+    """Single-edge-notched block in tension (the notched plate of tests/scenes.py with a
+    ``thickness`` in z, mm, meshed by tetrahedra): bottom clamped, top pulled in y with x and z
+    held."""
+    return ngtmc.Scene(_block_mesh(maxh, thickness=thickness), {"block": ngtmc.Material(210e3, 0.3, 2.7, l0)},
+                       supports=[ngtmc.Support("bottom", x=True, y=True, z=True)],
+                       load=ngtmc.DisplacementLoad("top", "y", hold_tangential=True),
+                       fracture_regions="block", **kw)
+
+
+def _damaged_block():
+    s = ngtmc.Solver(notched_block(), compile=True)
+    for load in (0.004, 0.006, 0.007):
+        s.solve_phase_field()
+        assert s.solve_displacement(load).converged
+        s.update_history()
+    return s
+
+
+def test_history_and_alpha_never_decrease_across_refinement_of_tetrahedra():
+    s = _damaged_block()
+    assert s.mesh.dim == 3 and np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
+    old_mesh = ngs.Mesh(s.mesh.ngmesh.Copy())
+    ne_old = s.mesh.ne
+    H_old = s.H_committed.copy().reshape(ne_old, -1)
+    fes_a_old = ngs.H1(old_mesh, order=1)
+    a_old = ngs.GridFunction(fes_a_old)
+    a_old.vec.FV().NumPy()[:] = s.alpha_committed
+    marked = adapt.mark(s, Adaptivity(h_crack=0.08, alpha_threshold=0.02))
+    assert 0 < marked.sum() < ne_old
+    adapt.refine(s, marked)
+    assert s.mesh.ne > ne_old and s.mesh.dim == 3
+    # H: every new point at least the largest old value of the old element holding the new one
+    # (located by the new element's centroid)
+    coords = np.asarray(s.mesh.ngmesh.Coordinates())
+    centroid = np.array([coords[[v.nr for v in el.vertices]].mean(axis=0) for el in s.mesh.Elements(ngs.VOL)])
+    owner = np.array([old_mesh(*c).nr for c in centroid])
+    assert np.all(owner >= 0)
+    H_new = s.H_committed.reshape(s.mesh.ne, -1)
+    assert np.all(H_new >= H_old[owner].max(axis=1, keepdims=True) * (1 - 1e-15))
+    np.testing.assert_array_equal(H_new[:ne_old][~marked], H_old[~marked])   # not refined: kept
+    # alpha (P1): at every new vertex, the old field there (exactly)
+    for v in range(s.mesh.nv):
+        (dof,) = s.fes_a.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))
+        assert s.alpha_committed[dof] == pytest.approx(a_old(old_mesh(*coords[v])), abs=1e-14)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_homogeneous_state_is_reproduced_exactly_on_tetrahedra(order):
+    """Uniaxial tension of a block (x held on the left, y on the bottom, z on the back: free
+    contraction): after two refinements of random elements the energies, the reaction and H are
+    the same, and u is still the equilibrium."""
+    mesh = _block_mesh(maxh=0.3, notch=None)
+    scene = ngtmc.Scene(mesh, {"block": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
+                        supports=[ngtmc.Support("left", x=True), ngtmc.Support("bottom", y=True),
+                                  ngtmc.Support("back", z=True)],
+                        load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="block", order=order)
+    s = ngtmc.Solver(scene, compile=True)
+    assert s.solve_displacement(2e-3).converged
+    s.update_history()
+    e0, f0, H0 = s.energies(), s.reaction(), s.H_committed.copy()
+    assert np.ptp(H0) < 1e-10 * H0.max()
+    rng = np.random.default_rng(order)
+    for _ in range(2):
+        adapt.refine(s, rng.random(s.mesh.ne) < 0.3)
+    e1, f1 = s.energies(), s.reaction()
+    # to the Newton solution's own noise: with order 2 its edge dofs are zero only to the
+    # solver's tolerance (3.8e-11 relative in the elastic energy, measured)
+    for k in e0:
+        assert e1[k] == pytest.approx(e0[k], rel=1e-10, abs=1e-300)
+    assert f1 == pytest.approx(f0, rel=1e-10)
+    np.testing.assert_allclose(s.H_committed, H0.max(), rtol=1e-10)
+    # still the equilibrium, to the Newton's tolerance: in 3D the carried boundary values differ
+    # from their target by round-off (a few 1e-16 mm), which costs one lifting iteration where 2D
+    # needs none; it moves u by less than the Newton's relative tolerance (8e-10 measured, order 2)
+    u1 = s.u.vec.FV().NumPy().copy()
+    res = s.solve_displacement(2e-3)
+    assert res.converged and res.iterations <= 1
+    assert np.linalg.norm(s.u.vec.FV().NumPy() - u1) <= DISPLACEMENT_RTOL * np.linalg.norm(u1)
+
+
+def test_order_two_field_is_transferred_exactly_on_tetrahedra():
+    """The trap of tests/test_adapt.py in 3D: NGSolve's prolongation of an order-2 field is not
+    exact without ``hoprolongation``; the transfer of ngtmc.adapt (which carries u through an
+    ``hoprolongation`` space, exact on tetrahedra) keeps a quadratic field exactly."""
+    x, y, z = ngs.x, ngs.y, ngs.z
+    field = ngs.CF((1e-3 * x * y, -2e-3 * z * z, 1e-3 * x * x))
+    plain_mesh = _block_mesh(maxh=0.4, notch=None)
+    g = ngs.GridFunction(ngs.VectorH1(plain_mesh, order=2))
+    g.Set(field)
+    for el in plain_mesh.Elements(ngs.VOL):
+        plain_mesh.SetRefinementFlag(el, el.nr % 2 == 0)
+    plain_mesh.Refine()
+    g.space.Update()
+    g.Update()
+    assert ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), plain_mesh)) > 1e-6
+    scene = ngtmc.Scene(_block_mesh(maxh=0.4, notch=None), {"block": ngtmc.Material(1000.0, 0.3)},
+                        supports=[ngtmc.Support("bottom", x=True, y=True, z=True)],
+                        load=ngtmc.DisplacementLoad("top", "y"), order=2)
+    s = ngtmc.Solver(scene, compile=True)
+    s.u.Set(field)
+    err = lambda: ngs.sqrt(ngs.Integrate(ngs.InnerProduct(s.u - field, s.u - field), s.mesh))
+    assert err() < 1e-12
+    adapt.refine(s, np.arange(s.mesh.ne) % 2 == 0)
+    assert err() < 1e-12
+
+
+def test_curved_boundary_stays_curved_on_tetrahedra():
+    ball = Sphere(Pnt(0, 0, 0), 1.0)
+    ball.solids.name = "ball"
+    ball.faces.name = "surface"
+    mesh = ngs.Mesh(OCCGeometry(ball).GenerateMesh(maxh=0.6))
+    mesh.Curve(2)
+    scene = adapt.private_scene(ngtmc.Scene(mesh, {"ball": ngtmc.Material(1000.0, 0.3)},
+                                            supports=[ngtmc.Support("surface", x=True, z=True)],
+                                            load=ngtmc.DisplacementLoad("surface", "y")))
+    s = ngtmc.Solver(scene, compile=True)
+    for _ in range(2):
+        adapt.refine(s, np.ones(s.mesh.ne, dtype=bool))
+    assert s.mesh.GetCurveOrder() == 2
+    exact = 4.0 / 3.0 * np.pi
+    assert abs(ngs.Integrate(1.0, s.mesh) - exact) < 2e-3 * exact
+    flat = ngs.Mesh(s.mesh.ngmesh.Copy())   # the same vertices with straight edges
+    assert abs(ngs.Integrate(1.0, flat) - exact) > 4e-3 * exact
+
+
+def test_refined_resolve_converges_on_tetrahedra_and_agrees_with_a_mesh_refined_beforehand():
+    """The notched block (0.1 mm thick) refined to h_crack = 1.25 l0 (840 -> 4883 tetrahedra in 4 refinements;
+    the expressions not compiled, to keep the test to seconds)."""
+    scene = notched_block(maxh=0.25, l0=0.1, thickness=0.1)
+    option = Adaptivity(h_crack=0.125)
+    sched = ngtmc.Schedule([0.0, 0.0055])
+    control = lambda: ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=0.0, du_min=1e-8)
+    sim = ngtmc.Simulation(scene, sched, control(), compile=False, adapt=option)
+    res = sim.run()
+    h = res.history
+    assert sim.refinements and h["elements"].iloc[-1] > h["elements"].iloc[0]
+    assert scene.mesh.ne == h["elements"].iloc[0]   # the scene's own mesh is not refined
+    s = res.solver
+    assert s.solve_displacement(s.load).iterations == 0   # the last state is an equilibrium there
+    final = res.solver.scene
+    ref = ngtmc.Simulation(dataclasses.replace(final, mesh=ngs.Mesh(final.mesh.ngmesh.Copy())), sched, control(),
+                           compile=False).run()
+    step_refined = max(step for step, _ in sim.refinements)
+    np.testing.assert_allclose(h["load"].to_numpy(), ref.history["load"].to_numpy(), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(h["force"].to_numpy()[step_refined:], ref.history["force"].to_numpy()[step_refined:],
+                               rtol=2e-2)
+
+
+def test_prisms_and_remeshing_in_3d_are_refused():
+    sched = ngtmc.Schedule([0.0, 1e-3])
+    control = ngtmc.AdaptiveStepControl(du_max=1e-3)
+    with pytest.raises(ValueError, match="remeshing.*2D meshes only"):
+        ngtmc.Simulation(notched_block(), sched, control, adapt=Adaptivity(h_crack=0.05, remesh_maxh=0.25))
+    from scenes import bar_mesh
+    slab = ngtmc.Scene(ngtmc.extrude(bar_mesh(maxh=0.1), 0.1), {"bar": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
+                       supports=[ngtmc.Support("left", x=True, y=True, z=True)],
+                       load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="bar")
+    with pytest.raises(ValueError, match="triangles.*tetrahedra.*prisms"):
+        ngtmc.Simulation(slab, sched, control, adapt=Adaptivity(h_crack=0.05))
