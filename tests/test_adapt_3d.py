@@ -191,3 +191,17 @@ def test_prisms_and_remeshing_in_3d_are_refused():
                        load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="bar")
     with pytest.raises(ValueError, match="triangles.*tetrahedra.*prisms"):
         ngtmc.Simulation(slab, sched, control, adapt=Adaptivity(h_crack=0.05))
+
+
+def test_report_names_a_refined_3d_mesh_by_its_surface_triangles():
+    """A group of snapshots on one mesh of a refined run is labelled with its size: the elements
+    in 2D, and in 3D the triangles of the solid's surface, which is what the snapshot holds and
+    the report draws."""
+    from ngtmc.report.page import snapshot_group_label
+    cases = [{"name": "main", "label": "block"}]
+    tri = np.zeros((472, 3), dtype=int)
+    assert snapshot_group_label("main@2", {"triangles": tri, "vertices": np.zeros((300, 3))}, cases) == \
+        "block, mesh 2 (472 surface triangles)"
+    assert snapshot_group_label("main@1", {"triangles": tri, "vertices": np.zeros((300, 2))}, cases) == \
+        "block, mesh 1 (472 elements)"
+    assert snapshot_group_label("other", {}, cases) == "other"

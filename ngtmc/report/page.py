@@ -24,14 +24,17 @@ from .figures3d import MAX_VALUES_3D, is_3d, snapshot_figures_3d
 def snapshot_group_label(name: str, snap: dict, cases: list[dict]) -> str:
     """Label of an entry of ``snapshots.npz`` that is not a case: a group ``<case>@<g>`` of the
     snapshots of a case whose mesh changed (adaptive refinement), named after its case, mesh
-    number and size; any other name as it is."""
+    number and size (its elements in 2D, the triangles of the solid's surface that the report
+    draws in 3D); any other name as it is."""
     base, sep, g = name.rpartition("@")
     label = next((c["label"] for c in cases if c["name"] == base), None) if sep else None
     if label is None or not g.isdigit():
         return name
     tri = snap.get("triangles") if isinstance(snap, dict) else None
     nt = int(np.shape(tri)[0]) if tri is not None and np.ndim(tri) == 2 else None
-    return f"{label}, mesh {g}" + (f" ({nt} elements)" if nt is not None else "")
+    vert = snap.get("vertices") if isinstance(snap, dict) else None
+    what = "surface triangles" if vert is not None and np.ndim(vert) == 2 and np.shape(vert)[1] == 3 else "elements"
+    return f"{label}, mesh {g}" + (f" ({nt} {what})" if nt is not None else "")
 
 
 def _env():
