@@ -140,6 +140,8 @@ class Snapshots:
         for i in range(k):
             out[f"u__{i}"] = self.u[i]
             out[f"alpha__{i}"] = self.alpha[i]
+        if self.section:
+            out["section_alpha"] = np.asarray(self.section, dtype=float)
         return out
 
     def _stacked(self) -> tuple:
@@ -174,7 +176,7 @@ class Snapshots:
             self.take(row)
 
     def take(self, row: dict):
-        if self.case.section is not None and self.dim == 3 and not self.changing_mesh:
+        if self.case.section is not None and self.dim == 3:   # the grid does not depend on the mesh
             self.section.append(self.section_values())
         u, a = self.vertex_fields()
         self.mesh_of.append(self._mesh_index())
@@ -206,11 +208,7 @@ class Snapshots:
             out = {f"{name}__vertices": m["vertices"], f"{name}__triangles": m["triangles"],
                    f"{name}__rho": m["rho"], f"{name}__loads": np.asarray(self.loads, dtype=float),
                    f"{name}__steps": np.asarray(self.steps, dtype=int), f"{name}__u": u, f"{name}__alpha": alpha}
-            if self.section and len(self.section) == len(self.loads):
-                g = self.section_grid()
-                out.update({f"{name}__section_plane": np.asarray([g["axis"], g["at"]], dtype=float),
-                            f"{name}__section_c1": g["c1"], f"{name}__section_c2": g["c2"],
-                            f"{name}__section_alpha": np.asarray(self.section, dtype=float)})
+            out.update(self._section_arrays(f"{name}__", range(len(self.loads))))
             return out
         out = {}
         for g, idx in enumerate(groups, start=1):
@@ -221,7 +219,18 @@ class Snapshots:
                         key + "steps": np.asarray([self.steps[i] for i in idx], dtype=int),
                         key + "u": np.asarray([self.u[i] for i in idx], dtype=float),
                         key + "alpha": np.asarray([self.alpha[i] for i in idx], dtype=float)})
+            out.update(self._section_arrays(key, idx))
         return out
+
+    def _section_arrays(self, key: str, idx) -> dict:
+        """The section entries (3D, ``case.section``) of the snapshots ``idx`` under the prefix
+        ``key`` (``{case}__`` or ``{case}@{g}__``); empty without a section for every snapshot."""
+        if not self.section or len(self.section) != len(self.loads):
+            return {}
+        g = self.section_grid()
+        return {key + "section_plane": np.asarray([g["axis"], g["at"]], dtype=float), key + "section_c1": g["c1"],
+                key + "section_c2": g["c2"],
+                key + "section_alpha": np.asarray([self.section[i] for i in idx], dtype=float)}
 
     def section_grid(self) -> dict:
         """The sampling grid of ``case.section`` (3D): ``axis`` (0, 1, 2 for x, y, z), ``at`` (mm),
