@@ -182,8 +182,8 @@ def check_solver(solver, remesh: bool = False):
     kind = {2: ngs.ET.TRIG, 3: ngs.ET.TET}.get(mesh.dim)
     if kind is None or any(el.type != kind for el in mesh.Elements(ngs.VOL)):
         raise ValueError("adaptive refinement (Adaptivity) needs a mesh of triangles (2D) or tetrahedra (3D) "
-                         "(bisection, exact high-order prolongation); an extruded slab of prisms cannot be "
-                         "refined: refine its 2D twin")
+                         "(bisection, exact high-order prolongation); for an extruded slab of prisms refine "
+                         "its 2D twin")
 
 
 def _per_element(values: np.ndarray, ne: int) -> np.ndarray:
@@ -206,12 +206,6 @@ def _element_regions(solver) -> tuple[np.ndarray, np.ndarray]:
     return frac, void
 
 
-def _element_nodes(mesh) -> np.ndarray:
-    """Vertex numbers (0-based) of every triangle (2D) or tetrahedron (3D), in the order of the
-    elements' numbers."""
-    return element_vertices(mesh)
-
-
 def _coordinates(mesh) -> np.ndarray:
     """Vertex coordinates, (nv, dim), mm."""
     return np.asarray(mesh.ngmesh.Coordinates())[:, :mesh.dim]
@@ -219,12 +213,12 @@ def _coordinates(mesh) -> np.ndarray:
 
 def _centroids(mesh) -> np.ndarray:
     """Centroid of every element, (ne, dim), mm."""
-    return _coordinates(mesh)[_element_nodes(mesh)].mean(axis=1)
+    return _coordinates(mesh)[element_vertices(mesh)].mean(axis=1)
 
 
 def _neighbours(mesh, flags: np.ndarray) -> np.ndarray:
     """Elements sharing a vertex with a flagged element (the flagged ones included)."""
-    nodes = _element_nodes(mesh)
+    nodes = element_vertices(mesh)
     hit = np.zeros(mesh.nv, dtype=bool)
     hit[nodes[flags].ravel()] = True
     return hit[nodes].any(axis=1)

@@ -50,7 +50,8 @@ import dataclasses
 import numpy as np
 import ngsolve as ngs
 
-from .adapt import _centroids, _coordinates, _element_nodes, _element_regions
+from .adapt import _centroids, _coordinates, _element_regions
+from .scene import element_vertices
 
 __all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step", "HISTORY_TRANSFERS"]
 
@@ -116,7 +117,7 @@ class Remesher:
         """Add the restrictions of the marked elements (a lattice of spacing ``targets[e]`` over
         each); return the rows added."""
         xy = _coordinates(mesh)
-        nodes = _element_nodes(mesh)
+        nodes = element_vertices(mesh)
         rows = []
         for e in np.flatnonzero(marked):
             h = float(targets[e])
@@ -244,7 +245,7 @@ def transfer(old, new, states=(), history: str = "max", refined: np.ndarray | No
     if old.alpha is not None:
         # each new vertex of a fracture element, seen from inside that element
         frac = np.flatnonzero(_element_regions(new)[0])
-        nodes = _element_nodes(new.mesh)
+        nodes = element_vertices(new.mesh)
         xy = _coordinates(new.mesh)
         owner = np.full(new.mesh.nv, -1)
         owner[nodes[frac].ravel()] = np.repeat(frac, 3)

@@ -207,7 +207,7 @@ def test_prisms_and_remeshing_in_3d_are_refused():
     slab = ngtmc.Scene(ngtmc.extrude(bar_mesh(maxh=0.1), 0.1), {"bar": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
                        supports=[ngtmc.Support("left", x=True, y=True, z=True)],
                        load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="bar")
-    with pytest.raises(ValueError, match="triangles.*tetrahedra.*prisms"):
+    with pytest.raises(ValueError, match="triangles.*tetrahedra.*slab of prisms"):
         ngtmc.Simulation(slab, sched, control, adapt=Adaptivity(h_crack=0.05))
 
 

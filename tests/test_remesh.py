@@ -14,6 +14,7 @@ import ngtmc
 from ngtmc import adapt, carried_state, remesh
 from ngtmc.adapt import Adaptivity
 from ngtmc.remesh import history_points
+from ngtmc.scene import element_vertices
 from scenes import damaged, notched_plate
 
 MAXH = 0.2   # mm, the notched plate's global size below
@@ -76,7 +77,7 @@ def test_homogeneous_state_is_reproduced_exactly():
                         new.mesh)
     assert np.sqrt(err) < 1e-12
     assert np.allclose(new.H_committed, 7.0, rtol=0, atol=1e-12)
-    used = np.unique(adapt._element_nodes(new.mesh))
+    used = np.unique(element_vertices(new.mesh))
     assert np.allclose(new.alpha.vec.FV().NumPy()[used], 0.125, atol=1e-12)
     assert np.allclose(new.alpha_committed[used], 0.125, atol=1e-12)
     for k, v in new.energies().items():
@@ -106,7 +107,7 @@ def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the
     xy = adapt._coordinates(new.mesh)
     a_old = ngs.GridFunction(s.fes_a)
     a_old.vec.FV().NumPy()[:] = s.alpha_committed
-    frac_vertices = np.unique(adapt._element_nodes(new.mesh))   # the plate is all fracture region
+    frac_vertices = np.unique(element_vertices(new.mesh))   # the plate is all fracture region
     old_at = np.array([a_old(s.mesh(*xy[v])) for v in frac_vertices])
     assert np.max(np.abs(new.alpha_committed[frac_vertices] - old_at)) < 1e-6
 
