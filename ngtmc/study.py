@@ -60,6 +60,8 @@ SOLVER_PARAMETERS = {
     "amr_history_fraction": (1.0, "-", "with h_crack: elements whose history H reaches this fraction of H_c = Gc / (6 l0) "
                                        "(the level at which AT-2 peaks; Adaptivity.history_fraction) are refined, in "
                                        "(0, 1]; lower refines earlier, before the crack starts"),
+    "amr_buffer": (1, "-", "with h_crack: layers of neighbours (sharing a vertex) refined with each element the "
+                           "indicator marks (Adaptivity.buffer, an integer >= 0)"),
     "stop_after_drop": (0.0, "-", "stop each case once its force has fallen below this fraction of its peak, after "
                                   "the peak (the crack has run; Simulation.stop_after_drop); 0: the whole schedule"),
 }
@@ -70,7 +72,7 @@ _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 #: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
 #: resume and compare.
 INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
-                            "amr_remesh_maxh": 0.0, "amr_history_fraction": 1.0}
+                            "amr_remesh_maxh": 0.0, "amr_history_fraction": 1.0, "amr_buffer": 1}
 
 
 #: Settings added after runs were recorded, at the value those runs had in effect: left out of the
@@ -78,7 +80,7 @@ INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 
 #: its own by naming them in a tuple ``ADDED_AT_DEFAULT`` of its module; their value is then
 #: the default of its PARAMETERS (:func:`added_at_default`).
 ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
-                    "amr_history_fraction": 1.0}
+                    "amr_history_fraction": 1.0, "amr_buffer": 1}
 
 
 def added_at_default(mod=None) -> dict:
@@ -144,6 +146,7 @@ def simulation_options(p: dict) -> dict:
                                       h_void=h_void if h_void > 0 else None,
                                       size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
                                       history_fraction=float(p.get("amr_history_fraction", 1.0)),
+                                      buffer=p.get("amr_buffer", 1),
                                       remesh_maxh=maxh if maxh > 0 else None)
         except (TypeError, ValueError) as e:
             raise StudyError(str(e)) from None

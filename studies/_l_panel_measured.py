@@ -271,3 +271,42 @@ L0_SWEEP = [
     {"l0": 33.33, "h_band": 2.0, "h_far": 8.0, "elements": 13845, "peak_force": 11554, "peak_load": 6.259,
      "force_at_6.6": 21, "steps": 212, "wall_time_s": 118},
 ]
+
+#: The crack free to run (study docstring, "The refined band's end sets it"): the paper's schedule
+#: (case main, 0 -> 6.3 -> 6 -> 7 mm), path following, one thread, with the refined band over the
+#: whole arm (``--set band_left=0``) and, as the same-resolution control, with the study's band
+#: (from x = 150 mm). Reproduced by WHOLE_ARM_COMMAND with the row's resolution, l0 and band_left.
+#: crack_x_at_turning_point: smallest x (mm) with alpha > 0.9 at 6.3 mm (the crack runs left from the
+#: corner at x = 250 mm, the arm is 250 mm long). reload_peak_force None: on reloading the force only
+#: creeps up (reload_largest_force, at 7 mm). Measured 2026-12-05 beside other runs on the 2 cores.
+WHOLE_ARM_COMMAND = ("ngtmc run l-panel --resolution {resolution} --set load_cases=cyclic --set scheme=path-following "
+                     "--set band_left={band_left} --set l0={l0} --no-report --no-vtk --threads 1")
+_FREE = MEASURED["medium_path_following_band_left_0_2026_12_05"]
+WHOLE_ARM = [
+    {"l0": 1.1875, "resolution": "medium", "band_left": 0.0, "status": "finished",
+     "record": "medium_path_following_band_left_0_2026_12_05",
+     **{k: _FREE[k] for k in ("elements", "first_loading_peak_force", "first_loading_peak_load", "snap_back_lowest_load",
+                              "crack_x_at_turning_point", "force_at_turning_point", "dissipated_at_turning_point",
+                              "reload_peak_force", "reload_largest_force", "steps", "newton_iterations", "cutbacks",
+                              "wall_time_s")}},
+    {"l0": 2.375, "resolution": "quick", "band_left": 0.0, "status": "finished", "elements": 16780,
+     "first_loading_peak_force": 15933, "first_loading_peak_load": 6.2666, "snap_back_lowest_load": 5.035,
+     "crack_x_at_turning_point": 5.2, "force_at_turning_point": 74.5, "dissipated_at_turning_point": 3514.8,
+     "reload_peak_force": None, "reload_largest_force": 77.1, "steps": 270, "newton_iterations": 1164,
+     "cutbacks": 12, "wall_time_s": 1340},
+    {"l0": 4.75, "resolution": "quick", "band_left": 0.0, "status": "finished", "elements": 16780,
+     "first_loading_peak_force": 14327, "first_loading_peak_load": 6.2427, "snap_back_lowest_load": 4.805,
+     "crack_x_at_turning_point": 5.2, "force_at_turning_point": 72.4, "dissipated_at_turning_point": 2976.9,
+     "reload_peak_force": None, "reload_largest_force": 75.6, "steps": 236, "newton_iterations": 1102,
+     "cutbacks": 30, "wall_time_s": 1833},
+    {"l0": 4.75, "resolution": "quick", "band_left": 150.0, "status": "finished", "elements": 8516,
+     "first_loading_peak_force": 14356, "first_loading_peak_load": 6.2429, "snap_back_lowest_load": None,
+     "crack_x_at_turning_point": 140.7, "force_at_turning_point": 5474, "dissipated_at_turning_point": 1586.7,
+     "reload_peak_force": 5476, "reload_peak_load": 6.3156, "final_force": 80, "crack_x_at_7": 0.0, "steps": 201,
+     "newton_iterations": 832, "cutbacks": 11, "wall_time_s": 478},
+    {"l0": 12.0, "resolution": "quick", "band_left": 0.0, "elements": 16780,
+     "status": "stalled at 6.1785 mm (2.58 kN, crack to x = 110.8 mm, 1656.6 N mm dissipated): steps of 1e-6 "
+               "mm with up to 66 Newton iterations and 12 cut-backs; stopped at step 138 (807 Newton iterations, "
+               "32 cut-backs, 1631 s)",
+     "first_loading_peak_force": 12797, "first_loading_peak_load": 6.2243},
+]

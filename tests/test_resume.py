@@ -249,6 +249,14 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     assert simulation_options(dict(p, h_crack=2.0, amr_history_fraction=0.5))["adapt"].history_fraction == 0.5
     with pytest.raises(StudyError, match="history_fraction"):
         simulation_options(dict(p, h_crack=2.0, amr_history_fraction=0.0))
+    # and before amr_buffer existed (one layer of neighbours)
+    assert p["amr_buffer"] == 1
+    old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_buffer"}
+    assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
+    assert parameters_hash(dict(p, h_crack=2.0, amr_buffer=0)) != parameters_hash(dict(p, h_crack=2.0))
+    assert simulation_options(dict(p, h_crack=2.0, amr_buffer=0))["adapt"].buffer == 0
+    with pytest.raises(StudyError, match="buffer"):
+        simulation_options(dict(p, h_crack=2.0, amr_buffer=-1))
     # so does a run recorded before stop_after_drop existed (the whole schedule, 0)
     assert p["stop_after_drop"] == 0.0
     assert parameters_hash({k: v for k, v in p.items() if k != "stop_after_drop"}) == parameters_hash(p)

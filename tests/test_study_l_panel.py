@@ -290,6 +290,29 @@ def test_a_crack_free_to_run_breaks_the_arm_record():
     assert free["unload_wf_growth"] == 0.0 and free["dissipated_at_turning_point"] > wide["dissipated_at_turning_point"]
 
 
+def test_whole_arm_runs_break_the_arm_at_every_l0_record():
+    """The recorded runs with the band over the whole arm (WHOLE_ARM): at every l0 measured the
+    crack runs through the arm (to within 5 % of its 250 mm) before the turning point, and the
+    panel reloads to no peak, while the same quick run with the study's band (from x = 150 mm)
+    arrests its crack near the band's end, reaches the same first-loading peak and reloads to a
+    peak 70 times the whole arm's force at 6.3 mm. The report's third figure shows the points."""
+    free = [r for r in S.WHOLE_ARM if r["band_left"] == 0.0 and r["status"] == "finished"]
+    assert {r["l0"] for r in free} >= {1.1875, 4.75}
+    for r in free:
+        assert r["crack_x_at_turning_point"] < 0.05 * 250.0 and r["reload_peak_force"] is None
+        assert r["force_at_turning_point"] < 0.01 * r["first_loading_peak_force"]
+        assert r["reload_largest_force"] < 1.1 * r["force_at_turning_point"]
+        assert r["snap_back_lowest_load"] < 6.3
+    (band,) = [r for r in S.WHOLE_ARM if r["band_left"] == 150.0]
+    (twin,) = [r for r in free if r["l0"] == band["l0"] and r["resolution"] == band["resolution"]]
+    assert band["first_loading_peak_force"] == pytest.approx(twin["first_loading_peak_force"], rel=0.01)
+    assert band["crack_x_at_turning_point"] == pytest.approx(150.0, abs=15.0)
+    assert band["reload_peak_force"] > 70.0 * twin["force_at_turning_point"]
+    fig = S.figures(study_parameters(S, "quick")[1])[2]
+    shown = {(x, y) for s in fig["series"] if "whole arm" in s["label"] for x, y in zip(s["x"], s["y"])}
+    assert shown == {(r["l0"], r["force_at_turning_point"]) for r in free}
+
+
 # the published reload peak (strict xfail, with the measured values) and the measured quick values
 # (regression guard, 5 %): the study's EXPECTED
 test_expected = expected_test(S)
