@@ -227,8 +227,8 @@ MEASURED = {
         "reload_peak_load": 6.9255, "final_force": 4274, "final_wf": 7013.9},
     "medium_path_following_band_left_0_2026_12_05": {
         "note": "the run of medium_path_following_paper_schedule_2026_12_03 with --set band_left=0 (the refined band "
-                "over the whole arm, x from 0 to 260 mm), one thread, stopped and resumed three times (wall_time_s "
-                "is its clock, pauses for CI runs included): the crack runs through the arm before the turning "
+                "over the whole width, x from 0 to 260 mm), one thread, stopped and resumed three times (wall_time_s "
+                "is its clock, pauses for CI runs included): the crack runs through the panel's width before the turning "
                 "point; on reloading the force only creeps up, no peak by 7 mm (reload_peak_force None, "
                 "reload_largest_force at the end). crack_track: (step, load, force, dissipated, smallest x with "
                 "alpha > 0.9) read from the checkpoint during the run (steps 421 and 429 from the snapshots)",
@@ -274,15 +274,15 @@ L0_SWEEP = [
 
 #: The crack free to run (study docstring, "The refined band's end sets it"): the paper's schedule
 #: (case main, 0 -> 6.3 -> 6 -> 7 mm), path following, one thread, with the refined band over the
-#: whole arm (``--set band_left=0``) and, as the same-resolution control, with the study's band
-#: (from x = 150 mm). Reproduced by WHOLE_ARM_COMMAND with the row's resolution, l0 and band_left.
+#: whole width (``--set band_left=0``) and, as the same-resolution control, with the study's band
+#: (from x = 150 mm). Reproduced by WHOLE_WIDTH_COMMAND with the row's resolution, l0 and band_left.
 #: crack_x_at_turning_point: smallest x (mm) with alpha > 0.9 at 6.3 mm (the crack runs left from the
-#: corner at x = 250 mm, the arm is 250 mm long). reload_peak_force None: on reloading the force only
+#: corner at x = 250 mm, the panel is 250 mm wide there). reload_peak_force None: on reloading the force only
 #: creeps up (reload_largest_force, at 7 mm). Measured 2026-12-05 beside other runs on the 2 cores.
-WHOLE_ARM_COMMAND = ("ngtmc run l-panel --resolution {resolution} --set load_cases=cyclic --set scheme=path-following "
+WHOLE_WIDTH_COMMAND = ("ngtmc run l-panel --resolution {resolution} --set load_cases=cyclic --set scheme=path-following "
                      "--set band_left={band_left} --set l0={l0} --no-report --no-vtk --threads 1")
 _FREE = MEASURED["medium_path_following_band_left_0_2026_12_05"]
-WHOLE_ARM = [
+WHOLE_WIDTH = [
     {"l0": 1.1875, "resolution": "medium", "band_left": 0.0, "status": "finished",
      "record": "medium_path_following_band_left_0_2026_12_05",
      **{k: _FREE[k] for k in ("elements", "first_loading_peak_force", "first_loading_peak_load", "snap_back_lowest_load",

@@ -309,37 +309,37 @@ Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
   between the two bands. The agreement of medium and the paper's resolution (8.68 and 8.83 kN)
   comes from their common band, and the l0 sweep above is conditional on it too. 357 steps, 1561
   Newton iterations, 22 cut-backs, 5976 s.
-  **With the band over the whole arm** (``--set band_left=0``, 60268 elements;
+  **With the band over the whole width** (``--set band_left=0``, 60268 elements;
   ``MEASURED["medium_path_following_band_left_0_2026_12_05"]``, measured 2026-12-05) the first
   loading is the same (16.82 kN at 6.274 mm), and the crack does not stop: it passes x = 150 mm
   at 6.246 mm (6.3 kN) and x = 100 mm at about 6.256 mm (2.9 kN), then the load snaps back while
   it runs on (x = 32.9 mm at 6.097 mm and 0.57 kN, 20.8 mm at 5.755 mm and 0.28 kN), down to
-  5.311 mm, and rises again with the arm broken: at the turning point the crack reaches x = 4.3
-  mm of the arm's 250 mm, 98.8 N are left (3526 N mm dissipated), and on reloading the force only
+  5.311 mm, and rises again with the panel broken in two: at the turning point the crack reaches x = 4.3
+  mm of the 250 mm width, 98.8 N are left (3526 N mm dissipated), and on reloading the force only
   creeps up, to 100.8 N at 7 mm (x = 3.5 mm): **no reload peak**. So at l0 = 1.1875 mm, with the
-  crack resolved wherever it runs, the arm breaks through before 6.3 mm, and every reload peak
+  crack resolved wherever it runs, the panel breaks through before 6.3 mm, and every reload peak
   of the study (8.68 kN at medium, 8.83 kN at the paper's resolution, 4.34 kN with the band from
   x = 100 mm) is the restart of a crack that the band's end arrested. 429 steps, 2037 Newton
   iterations, 30 cut-backs, 13640 s on its clock (stopped and resumed three times).
-  **The same at larger l0** (``WHOLE_ARM``, measured 2026-12-05, path following, the paper's
-  schedule; quick has h_band = 2 mm over the whole arm, 16780 elements)::
+  **The same at larger l0** (``WHOLE_WIDTH``, measured 2026-12-05, path following, the paper's
+  schedule; quick has h_band = 2 mm over the whole width, 16780 elements)::
 
-      l0 (mm)  resolution  band        first-loading peak  crack at 6.3 mm to x  force at 6.3 mm  reload peak
-      1.1875   medium      whole arm   16.82 kN            4.3 mm                98.8 N           none
-      2.375    quick       whole arm   15.93               5.2                   74.5 N           none
-      4.75     quick       whole arm   14.33               5.2                   72.4 N           none
-      4.75     quick       x >= 150    14.36               140.7                 5.47 kN          5.48 kN at 6.316 mm
+      l0 (mm)  resolution  band          first-loading peak  crack at 6.3 mm to x  force at 6.3 mm  reload peak
+      1.1875   medium      whole width   16.82 kN            4.3 mm                98.8 N           none
+      2.375    quick       whole width   15.93               5.2                   74.5 N           none
+      4.75     quick       whole width   14.33               5.2                   72.4 N           none
+      4.75     quick       x >= 150      14.36               140.7                 5.47 kN          5.48 kN at 6.316 mm
 
   (none: on reloading the force only creeps up, by at most 5 % by 7 mm.) At each l0 the crack
-  free to run crosses the arm while the load snaps back (to 5.31, 5.03 and 4.80 mm), and
+  free to run crosses the panel while the load snaps back (to 5.31, 5.03 and 4.80 mm), and
   the same quick run with the study's band, the control, reaches the same first-loading peak
   (+0.2 %) but stops its crack 9 mm past the band's end and reloads to 5.48 kN, restarting at
-  the turning point's force as at medium. At l0 = 12 mm (quick, whole arm) the run stalled at
+  the turning point's force as at medium. At l0 = 12 mm (quick, whole width) the run stalled at
   6.1785 mm with its crack at x = 110.8 mm (2.58 kN; steps of 1e-6 mm), and the medium run at
-  l0 = 4.75 mm was not finished (MEDIUM_475). **So no l0 measured gives this model an arrested
-  crack at 6.3 mm when the crack is resolved wherever it runs**: the paper's reload peak of
-  7.6 kN, like ours, needs a crack stopped by its mesh, and is not a property of the model. The
-  paper's text does not say how far its refined zone reaches.
+  l0 = 4.75 mm was not finished (MEDIUM_475). **So for l0 from 1.1875 to 4.75 mm this model has no
+  arrested crack at 6.3 mm when the crack is resolved wherever it runs**: the paper's reload
+  peak of 7.6 kN, like ours, needs a crack stopped by its mesh; it is not a property of the
+  model at these l0. The paper's text does not say how far its refined zone reaches.
 * At the paper's resolution the reload peak is 28.6 % above the force at the turning point (8.83
   against 6.87 kN; 25.0 % at medium with the same schedule; at quick and medium with the turning
   point at 6.6 mm, 5.1 % and 0.3 %): there the crack had arrested by 6.3 mm and restarts at
@@ -396,7 +396,7 @@ from ngtmc.study import SOLVER_PARAMETERS, Case, data_path, simulation_options
 from ngtmc.studies._l_panel_geometry import (_segment, build_mesh, effective_gap,  # noqa: F401 (interface)
                                             effective_schedule)
 from ngtmc.studies._l_panel_measured import (L0_SWEEP, L0_SWEEP_COMMAND, MEASURED,  # noqa: F401 (records)
-                                             WHOLE_ARM, WHOLE_ARM_COMMAND)
+                                             WHOLE_WIDTH, WHOLE_WIDTH_COMMAND)
 
 NAME = "l_panel"
 TITLE = "L-shaped panel: load, unload, reload through an indenter"
@@ -518,11 +518,11 @@ MEDIUM_PAPER_SCHEDULE_BY_L0 = {1.1875: "medium_path_following_paper_schedule_202
                                4.75: "medium_path_following_l0_4.75_2026_12_05"}
 
 
-def _whole_arm_by_resolution() -> dict:
-    """The finished WHOLE_ARM runs with the band over the whole arm, by resolution (medium first)."""
+def _whole_width_by_resolution() -> dict:
+    """The finished WHOLE_WIDTH runs with the band over the whole width, by resolution (medium first)."""
     out: dict = {}
     for res in ("medium", "quick", "paper"):
-        rows = sorted((r for r in WHOLE_ARM if r["resolution"] == res and r["band_left"] == 0.0
+        rows = sorted((r for r in WHOLE_WIDTH if r["resolution"] == res and r["band_left"] == 0.0
                        and r["status"] == "finished"), key=lambda r: r["l0"])
         if rows:
             out[res] = rows
@@ -535,7 +535,7 @@ def _reload_l0_figure() -> dict:
     l0s = sorted(MEDIUM_PAPER_SCHEDULE_BY_L0)
     rec = [MEASURED[MEDIUM_PAPER_SCHEDULE_BY_L0[l0]] for l0 in l0s]
     wide = MEASURED["medium_path_following_band_left_100_2026_12_05"]
-    quick_band = sorted((r for r in WHOLE_ARM if r["band_left"] > 0 and r["status"] == "finished"),
+    quick_band = sorted((r for r in WHOLE_WIDTH if r["band_left"] > 0 and r["status"] == "finished"),
                         key=lambda r: r["l0"])
     x = [l0s[0] / 1.2, l0s[-1] * 1.2]
     return {
@@ -551,7 +551,7 @@ def _reload_l0_figure() -> dict:
                     "by the turning point: with the band from x = 100 mm (--set band_left=100, l0 = 1.1875 mm) "
                     "the crack stops at x = 100 mm and the reload peak halves, 4.34 kN (the single point), so "
                     "these reload peaks are set by the band's extent, a choice of the mesh. With the band over the "
-                    "whole arm (--set band_left=0) the crack runs through the arm before the turning point at every "
+                    "whole width (--set band_left=0) the crack runs through the panel's width before the turning point at every "
                     "l0 measured, and the panel reloads to no peak: those points are the force left at 6.3 mm "
                     "(below 0.1 kN); at quick the study's band reloads the same l0 to 5.48 kN (the control)."),
         "series": [
@@ -563,10 +563,10 @@ def _reload_l0_figure() -> dict:
              "y": [float(r["force_at_turning_point"]) for r in rec]},
             {"label": "reload peak with the band from x = 100 mm (medium, path following)", "kind": "points",
              "x": [l0s[0]], "y": [float(wide["reload_peak_force"])]},
-            *[{"label": f"force at the turning point, band over the whole arm ({res}): the crack through the arm, "
+            *[{"label": f"force at the turning point, band over the whole width ({res}): the crack through the panel's width, "
                         "no reload peak", "kind": "points", "x": [r["l0"] for r in rows],
                "y": [float(r["force_at_turning_point"]) for r in rows]}
-              for res, rows in _whole_arm_by_resolution().items()],
+              for res, rows in _whole_width_by_resolution().items()],
             {"label": "reload peak with the study's band, quick (the same-resolution control)", "kind": "points",
              "x": [r["l0"] for r in quick_band], "y": [float(r["reload_peak_force"]) for r in quick_band]},
             {"label": "Ciceri et al. 2026: reload peak 7.6 kN", "kind": "curve", "x": x, "y": [7600.0, 7600.0]},
@@ -784,8 +784,10 @@ EXPECTED = {
                  "at medium reloads to 8.68 kN, against 8.83 kN at the paper's resolution), the refined band's "
                  "extent does: the crack stops at the band's end (x = 150 mm) by the turning point, and with the "
                  "band from x = 100 mm it stops there and reloads to 4.34 kN (-43 %; medium, 2026-12-05); with "
-                 "the band over the whole arm the crack runs through the arm (to x = 4.3 of 250 mm) before 6.3 mm, "
-                 "with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; medium, 2026-12-05)"},
+                 "the band over the whole width the crack runs through the panel's width (to x = 4.3 of 250 mm) before 6.3 mm, "
+                 "with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; medium, 2026-12-05), and so it "
+                 "does at l0 = 2.375 and 4.75 mm (quick), where the study's band reloads to 5.48 kN (WHOLE_WIDTH): "
+                 "the published reload peak needs a crack arrested by its mesh"},
     "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
                          "source": "measured, quick (regression guard; the turning point, 6.3 mm)"},
     "reload_peak_force": {"case": "main", "quantity": "reload_peak_force", "value": 23621.0, "unit": "N", "rel": 0.05,

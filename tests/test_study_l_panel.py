@@ -267,7 +267,7 @@ def test_reload_peak_set_by_the_band_end_record():
 
 
 def test_a_crack_free_to_run_breaks_the_arm_record():
-    """The recorded medium run with the band over the whole arm: the same first loading as the
+    """The recorded medium run with the band over the whole width: the same first loading as the
     100 mm band's; before the turning point (6.3 mm) its crack passes both band ends (x = 150 and
     100 mm) while the load stays below 6.3 mm, and by the turning point it has run through the
     arm (x = 250 -> 4.3 mm), so reloading finds no peak, only a force below 3 % of the 100 mm
@@ -291,25 +291,25 @@ def test_a_crack_free_to_run_breaks_the_arm_record():
 
 
 def test_whole_arm_runs_break_the_arm_at_every_l0_record():
-    """The recorded runs with the band over the whole arm (WHOLE_ARM): at every l0 measured the
-    crack runs through the arm (to within 5 % of its 250 mm) before the turning point, and the
+    """The recorded runs with the band over the whole width (WHOLE_WIDTH): at every l0 measured the
+    crack runs through the panel's width (to within 5 % of the 250 mm width) before the turning point, and the
     panel reloads to no peak, while the same quick run with the study's band (from x = 150 mm)
     arrests its crack near the band's end, reaches the same first-loading peak and reloads to a
-    peak 70 times the whole arm's force at 6.3 mm. The report's third figure shows the points."""
-    free = [r for r in S.WHOLE_ARM if r["band_left"] == 0.0 and r["status"] == "finished"]
+    peak 70 times the whole width's force at 6.3 mm. The report's third figure shows the points."""
+    free = [r for r in S.WHOLE_WIDTH if r["band_left"] == 0.0 and r["status"] == "finished"]
     assert {r["l0"] for r in free} >= {1.1875, 4.75}
     for r in free:
         assert r["crack_x_at_turning_point"] < 0.05 * 250.0 and r["reload_peak_force"] is None
         assert r["force_at_turning_point"] < 0.01 * r["first_loading_peak_force"]
         assert r["reload_largest_force"] < 1.1 * r["force_at_turning_point"]
         assert r["snap_back_lowest_load"] < 6.3
-    (band,) = [r for r in S.WHOLE_ARM if r["band_left"] == 150.0]
+    (band,) = [r for r in S.WHOLE_WIDTH if r["band_left"] == 150.0]
     (twin,) = [r for r in free if r["l0"] == band["l0"] and r["resolution"] == band["resolution"]]
     assert band["first_loading_peak_force"] == pytest.approx(twin["first_loading_peak_force"], rel=0.01)
     assert band["crack_x_at_turning_point"] == pytest.approx(150.0, abs=15.0)
     assert band["reload_peak_force"] > 70.0 * twin["force_at_turning_point"]
     fig = S.figures(study_parameters(S, "quick")[1])[2]
-    shown = {(x, y) for s in fig["series"] if "whole arm" in s["label"] for x, y in zip(s["x"], s["y"])}
+    shown = {(x, y) for s in fig["series"] if "whole width" in s["label"] for x, y in zip(s["x"], s["y"])}
     assert shown == {(r["l0"], r["force_at_turning_point"]) for r in free}
 
 
