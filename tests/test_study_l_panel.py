@@ -266,11 +266,11 @@ def test_reload_peak_set_by_the_band_end_record():
     assert point["x"] == [1.1875] and point["y"] == [wide["reload_peak_force"]]
 
 
-def test_a_crack_free_to_run_breaks_the_arm_record():
+def test_a_crack_free_to_run_breaks_the_panel_record():
     """The recorded medium run with the band over the whole width: the same first loading as the
     100 mm band's; before the turning point (6.3 mm) its crack passes both band ends (x = 150 and
     100 mm) while the load stays below 6.3 mm, and by the turning point it has run through the
-    arm (x = 250 -> 4.3 mm), so reloading finds no peak, only a force below 3 % of the 100 mm
+    panel's 250 mm width (x = 250 -> 4.3 mm), so reloading finds no peak, only a force below 3 % of the 100 mm
     band's reload peak: a crack resolved wherever it runs does not stop at l0 = 1.1875 mm, so the
     study's reload peaks are bounds set by the band (docstring, "The refined band's end sets it")."""
     wide = S.MEASURED["medium_path_following_band_left_100_2026_12_05"]
@@ -284,13 +284,13 @@ def test_a_crack_free_to_run_breaks_the_arm_record():
     assert max(loads[i] for i in before) < 6.3 and xs[before[-1]] < wide["crack_x_at_turning_point"] - 50.0
     past_100 = [forces[i] for i in before if xs[i] < 100.0]
     assert past_100 and max(past_100) < wide["reload_peak_force"]
-    assert free["crack_x_at_turning_point"] < 0.05 * 250.0   # through the 250 mm arm, to within 5 %
+    assert free["crack_x_at_turning_point"] < 0.05 * 250.0   # through the 250 mm width, to within 5 %
     assert free["reload_peak_force"] is None
     assert free["reload_largest_force"] < 0.03 * wide["reload_peak_force"]
     assert free["unload_wf_growth"] == 0.0 and free["dissipated_at_turning_point"] > wide["dissipated_at_turning_point"]
 
 
-def test_whole_arm_runs_break_the_arm_at_every_l0_record():
+def test_whole_width_runs_break_the_panel_at_every_l0_record():
     """The recorded runs with the band over the whole width (WHOLE_WIDTH): at every l0 measured the
     crack runs through the panel's width (to within 5 % of the 250 mm width) before the turning point, and the
     panel reloads to no peak, while the same quick run with the study's band (from x = 150 mm)
