@@ -278,7 +278,9 @@ L0_SWEEP = [
 #: (from x = 150 mm). Reproduced by WHOLE_WIDTH_COMMAND with the row's resolution, l0 and band_left.
 #: crack_x_at_turning_point: smallest x (mm) with alpha > 0.9 at 6.3 mm (the crack runs left from the
 #: corner at x = 250 mm, the panel is 250 mm wide there). reload_peak_force None: on reloading the force only
-#: creeps up (reload_largest_force, at 7 mm). Measured 2026-12-05 beside other runs on the 2 cores.
+#: creeps up (reload_largest_force, at 7 mm). crack_track of an unfinished run: (step, load, force,
+#: dissipated, smallest x with alpha > 0.9) from its checkpoint during the run. Measured 2026-12-05
+#: beside other runs on the 2 cores.
 WHOLE_WIDTH_COMMAND = ("ngtmc run l-panel --resolution {resolution} --set load_cases=cyclic --set scheme=path-following "
                      "--set band_left={band_left} --set l0={l0} --no-report --no-vtk --threads 1")
 _FREE = MEASURED["medium_path_following_band_left_0_2026_12_05"]
@@ -304,6 +306,14 @@ WHOLE_WIDTH = [
      "crack_x_at_turning_point": 140.7, "force_at_turning_point": 5474, "dissipated_at_turning_point": 1586.7,
      "reload_peak_force": 5476, "reload_peak_load": 6.3156, "final_force": 80, "crack_x_at_7": 0.0, "steps": 201,
      "newton_iterations": 832, "cutbacks": 11, "wall_time_s": 478},
+    {"l0": 4.75, "resolution": "medium", "band_left": 0.0, "elements": 60268,
+     "status": "unfinished: stopped for time at step 279 (5.8838 mm, 0.46 kN, crack to x = 36.3 mm), before the "
+               "turning point; 1348 Newton iterations, 15 cut-backs, 6509 s (resumable)",
+     "first_loading_peak_force": 13733, "first_loading_peak_load": 6.2281,
+     "crack_track": [(96, 6.2000, 9224, 549.1, 211.7), (122, 6.2013, 7375, 835.4, 185.9),
+                     (152, 6.2041, 5983, 1074.0, 163.9), (193, 6.2043, 4222, 1397.4, 134.0),
+                     (208, 6.2038, 3698, 1503.5, 124.0), (249, 6.1631, 1378, 2070.8, 69.5),
+                     (279, 5.8838, 459, 2415.4, 36.3)]},
     {"l0": 12.0, "resolution": "quick", "band_left": 0.0, "elements": 16780,
      "status": "stalled at 6.1785 mm (2.58 kN, crack to x = 110.8 mm, 1656.6 N mm dissipated): steps of 1e-6 "
                "mm with up to 66 Newton iterations and 12 cut-backs; stopped at step 138 (807 Newton iterations, "

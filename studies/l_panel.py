@@ -335,8 +335,11 @@ Reload peak at the paper's resolution (case ``main``, completed 2026-12-03)
   the same quick run with the study's band, the control, reaches the same first-loading peak
   (+0.2 %) but stops its crack 9 mm past the band's end and reloads to 5.48 kN, restarting at
   the turning point's force as at medium. At l0 = 12 mm (quick, whole width) the run stalled at
-  6.1785 mm with its crack at x = 110.8 mm (2.58 kN; steps of 1e-6 mm), and the medium run at
-  l0 = 4.75 mm was not finished (MEDIUM_475). **So for l0 from 1.1875 to 4.75 mm this model has no
+  6.1785 mm with its crack at x = 110.8 mm (2.58 kN; steps of 1e-6 mm). The medium run at
+  l0 = 4.75 mm (whole width, 60268 elements; stopped for time at step 279) peaks at 13.73 kN
+  (the band's run: 13.76 kN); its crack passes x = 134 mm, where the band's crack stood at the
+  turning point, at 6.204 mm and 4.22 kN, and runs on to x = 36.3 mm while the load snaps back to
+  5.884 mm (0.46 kN), as at l0 = 1.1875 mm. **So for l0 from 1.1875 to 4.75 mm this model has no
   arrested crack at 6.3 mm when the crack is resolved wherever it runs**: the paper's reload
   peak of 7.6 kN, like ours, needs a crack stopped by its mesh; it is not a property of the
   model at these l0. The paper's text does not say how far its refined zone reaches.

@@ -308,6 +308,14 @@ def test_whole_width_runs_break_the_panel_at_every_l0_record():
     assert band["first_loading_peak_force"] == pytest.approx(twin["first_loading_peak_force"], rel=0.01)
     assert band["crack_x_at_turning_point"] == pytest.approx(150.0, abs=15.0)
     assert band["reload_peak_force"] > 70.0 * twin["force_at_turning_point"]
+    # the unfinished medium run at 4 x l0: its crack passes where the band's crack stood at the turning
+    # point while the load is still below 6.3 mm, and runs on while the load snaps back
+    (med,) = [r for r in S.WHOLE_WIDTH if r["resolution"] == "medium" and r["l0"] == 4.75]
+    band475 = S.MEASURED["medium_path_following_l0_4.75_2026_12_05"]
+    assert med["first_loading_peak_force"] == pytest.approx(band475["first_loading_peak_force"], rel=0.01)
+    track = med["crack_track"]
+    assert all(t1[4] <= t0[4] for t0, t1 in zip(track, track[1:])) and max(t[1] for t in track) < 6.3
+    assert track[-1][4] < band475["crack_x_at_turning_point"] - 50.0 and track[-1][1] < track[0][1]
     fig = S.figures(study_parameters(S, "quick")[1])[2]
     shown = {(x, y) for s in fig["series"] if "whole width" in s["label"] for x, y in zip(s["x"], s["y"])}
     assert shown == {(r["l0"], r["force_at_turning_point"]) for r in free}
