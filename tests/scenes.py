@@ -101,3 +101,19 @@ def damaged(scene, loads=(0.004, 0.006, 0.007)):
         assert s.solve_displacement(load).converged
         s.update_history()
     return s
+
+
+def refined_twice_from_homogeneous(s, seed, load=2e-3):
+    """Solve ``s`` (a Solver of a homogeneous tension scene) at ``load`` (mm), commit the history,
+    then refine a random 30 % of its elements twice (ngtmc.adapt.refine, seeded). Returns the
+    energies, reaction and committed history before, and the energies and reaction after (the
+    refined state stays in ``s``)."""
+    import numpy as np
+    from ngtmc import adapt
+    assert s.solve_displacement(load).converged
+    s.update_history()
+    e0, f0, H0 = s.energies(), s.reaction(), s.H_committed.copy()
+    rng = np.random.default_rng(seed)
+    for _ in range(2):
+        adapt.refine(s, rng.random(s.mesh.ne) < 0.3)
+    return e0, f0, H0, s.energies(), s.reaction()

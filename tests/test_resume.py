@@ -17,7 +17,7 @@ import pytest
 
 from ngtmc.runfiles import CheckpointWarning, effective_status, parameters_hash
 from ngtmc.runner import run_study
-from ngtmc.study import StudyError
+from ngtmc.study import ADDED_AT_DEFAULT, INERT_WITHOUT_REFINEMENT, StudyError
 
 from test_runner import _physics, tiny_study  # noqa: E402
 
@@ -240,23 +240,18 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
         resume_parameters(meta_old, mod, None, None, tmp_path)
     # a study that does not name it keeps it in the hash (another study's setting)
     assert parameters_hash({k: v for k, v in p.items() if k != "band_left"}) != parameters_hash(p)
-    # and before amr_history_fraction existed (1)
-    assert p["amr_history_fraction"] == 1.0
-    old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_history_fraction"}
-    assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
-    assert parameters_hash(dict(p, h_crack=2.0, amr_history_fraction=0.5)) != parameters_hash(dict(p, h_crack=2.0))
+    # and before amr_history_fraction (1) and amr_buffer (one layer of neighbours) existed: each left
+    # out of the hash at its default, in it at another value, and passed on to Adaptivity (checked there)
     from ngtmc.study import simulation_options
-    assert simulation_options(dict(p, h_crack=2.0, amr_history_fraction=0.5))["adapt"].history_fraction == 0.5
-    with pytest.raises(StudyError, match="history_fraction"):
-        simulation_options(dict(p, h_crack=2.0, amr_history_fraction=0.0))
-    # and before amr_buffer existed (one layer of neighbours)
-    assert p["amr_buffer"] == 1
-    old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != "amr_buffer"}
-    assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
-    assert parameters_hash(dict(p, h_crack=2.0, amr_buffer=0)) != parameters_hash(dict(p, h_crack=2.0))
-    assert simulation_options(dict(p, h_crack=2.0, amr_buffer=0))["adapt"].buffer == 0
-    with pytest.raises(StudyError, match="buffer"):
-        simulation_options(dict(p, h_crack=2.0, amr_buffer=-1))
+    for name, other, attribute, bad in (("amr_history_fraction", 0.5, "history_fraction", 0.0),
+                                        ("amr_buffer", 0, "buffer", -1)):
+        assert p[name] == INERT_WITHOUT_REFINEMENT[name] == ADDED_AT_DEFAULT[name]
+        old_amr = {k: v for k, v in dict(p, h_crack=2.0).items() if k != name}
+        assert parameters_hash(old_amr) == parameters_hash(dict(p, h_crack=2.0))
+        assert parameters_hash(dict(p, h_crack=2.0, **{name: other})) != parameters_hash(dict(p, h_crack=2.0))
+        assert getattr(simulation_options(dict(p, h_crack=2.0, **{name: other}))["adapt"], attribute) == other
+        with pytest.raises(StudyError, match=attribute):
+            simulation_options(dict(p, h_crack=2.0, **{name: bad}))
     # so does a run recorded before stop_after_drop existed (the whole schedule, 0)
     assert p["stop_after_drop"] == 0.0
     assert parameters_hash({k: v for k, v in p.items() if k != "stop_after_drop"}) == parameters_hash(p)
