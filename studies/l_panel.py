@@ -554,9 +554,10 @@ def _reload_l0_figure() -> dict:
                     "by the turning point: with the band from x = 100 mm (--set band_left=100, l0 = 1.1875 mm) "
                     "the crack stops at x = 100 mm and the reload peak halves, 4.34 kN (the single point), so "
                     "these reload peaks are set by the band's extent, a choice of the mesh. With the band over the "
-                    "whole width (--set band_left=0) the crack runs through the panel's width before the turning point at every "
-                    "l0 measured, and the panel reloads to no peak: those points are the force left at 6.3 mm "
-                    "(below 0.1 kN); at quick the study's band reloads the same l0 to 5.48 kN (the control)."),
+                    "whole width (--set band_left=0) the crack runs through the panel's width before the turning "
+                    "point at every l0 whose run finished, and the panel reloads to no peak: those points are the "
+                    "force left at 6.3 mm (below 0.1 kN); at quick the study's band reloads the same l0 to 5.48 kN "
+                    "(the control)."),
         "series": [
             {"label": "first-loading peak (medium, path following)", "kind": "curve", "x": l0s,
              "y": [float(r["first_loading_peak_force"]) for r in rec]},
@@ -566,8 +567,8 @@ def _reload_l0_figure() -> dict:
              "y": [float(r["force_at_turning_point"]) for r in rec]},
             {"label": "reload peak with the band from x = 100 mm (medium, path following)", "kind": "points",
              "x": [l0s[0]], "y": [float(wide["reload_peak_force"])]},
-            *[{"label": f"force at the turning point, band over the whole width ({res}): the crack through the panel's width, "
-                        "no reload peak", "kind": "points", "x": [r["l0"] for r in rows],
+            *[{"label": f"force at the turning point, band over the whole width ({res}): the crack through the "
+                        "panel's width, no reload peak", "kind": "points", "x": [r["l0"] for r in rows],
                "y": [float(r["force_at_turning_point"]) for r in rows]}
               for res, rows in _whole_width_by_resolution().items()],
             {"label": "reload peak with the study's band, quick (the same-resolution control)", "kind": "points",
@@ -787,8 +788,8 @@ EXPECTED = {
                  "at medium reloads to 8.68 kN, against 8.83 kN at the paper's resolution), the refined band's "
                  "extent does: the crack stops at the band's end (x = 150 mm) by the turning point, and with the "
                  "band from x = 100 mm it stops there and reloads to 4.34 kN (-43 %; medium, 2026-12-05); with "
-                 "the band over the whole width the crack runs through the panel's width (to x = 4.3 of 250 mm) before 6.3 mm, "
-                 "with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; medium, 2026-12-05), and so it "
+                 "the band over the whole width the crack runs through the panel's width (to x = 4.3 of 250 mm) "
+                 "before 6.3 mm, with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; medium, 2026-12-05), and so it "
                  "does at l0 = 2.375 and 4.75 mm (quick), where the study's band reloads to 5.48 kN (WHOLE_WIDTH): "
                  "the published reload peak needs a crack arrested by its mesh"},
     "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
