@@ -30,8 +30,8 @@ from the state before the step.
 ``Adaptivity(remesh_maxh=...)`` refines by meshing the geometry again instead of bisecting
 (:mod:`ngtmc.remesh`, generated element shapes, the state carried across non-nested meshes).
 
-Limits of this phase: triangles (2D) and tetrahedra (3D) by bisection, whose ``hoprolongation``
-is exact; remeshing is 2D only; no prisms (an extruded slab); the adjoint of
+Limits of this phase: triangles (2D), tetrahedra and prisms (3D) by bisection, a prism across
+its triangles only (an extruded slab keeps its layers); remeshing is 2D only; the adjoint of
 :mod:`ngtmc.sensitivities` refuses a run whose mesh changed.
 
 The bisection and the transfer of the state to the refined mesh live in :mod:`ngtmc.bisection`.
@@ -170,20 +170,32 @@ def private_scene(scene):
     return dataclasses.replace(scene, mesh=copy, density=density)
 
 
-def check_solver(solver, remesh: bool = False):
+def check_solver(solver, remesh: bool = False, adapt: Adaptivity | None = None):
     """ValueError when the solver's scene cannot be refined by this module: bisection needs
-    triangles (2D) or tetrahedra (3D), whose high-order prolongation (``hoprolongation``) is exact
-    (tests/test_adapt.py, tests/test_adapt_3d.py); remeshing (``remesh``, :mod:`ngtmc.remesh`) is
-    2D only."""
+    triangles (2D), tetrahedra or prisms (3D; tests/test_adapt.py, tests/test_adapt_3d.py,
+    tests/test_adapt_prisms.py); remeshing (``remesh``, :mod:`ngtmc.remesh`) is 2D only. NGSolve
+    bisects a prism across its triangles only, never along its height: with ``adapt``, a slab
+    whose prisms are taller than the smallest size they are to reach is refused (its marked
+    prisms would never reach their target)."""
     mesh = solver.mesh
     if remesh and mesh.dim != 2:
         raise ValueError("refinement by remeshing (Adaptivity remesh_maxh) is implemented for 2D meshes only; "
-                         "a 3D mesh of tetrahedra is refined by bisection (remesh_maxh=None)")
-    kind = {2: ngs.ET.TRIG, 3: ngs.ET.TET}.get(mesh.dim)
-    if kind is None or any(el.type != kind for el in mesh.Elements(ngs.VOL)):
-        raise ValueError("adaptive refinement (Adaptivity) needs a mesh of triangles (2D) or tetrahedra (3D) "
-                         "(bisection, exact high-order prolongation); for an extruded slab of prisms refine "
-                         "its 2D twin")
+                         "a 3D mesh of tetrahedra or prisms is refined by bisection (remesh_maxh=None)")
+    types = {el.type for el in mesh.Elements(ngs.VOL)}
+    if not (types == {ngs.ET.TRIG} if mesh.dim == 2 else types in ({ngs.ET.TET}, {ngs.ET.PRISM})):
+        raise ValueError("adaptive refinement (Adaptivity) needs a mesh of triangles (2D), or of tetrahedra or of "
+                         "prisms (3D), one kind only (bisection)")
+    if adapt is not None and types == {ngs.ET.PRISM}:
+        nodes = element_vertices(mesh)
+        xyz = _coordinates(mesh)
+        height = float(np.max(np.linalg.norm(xyz[nodes[:, 3:]] - xyz[nodes[:, :3]], axis=2)))
+        sizes = [h for h in (adapt.h_crack, adapt.h_void) if h is not None]
+        smallest = min(sizes) * adapt.size_tolerance
+        if height > smallest * (1.0 + 1e-9):
+            raise ValueError(f"the prisms are up to {height:.4g} mm tall, more than the smallest size they are to "
+                             f"be refined to ({smallest:.4g} mm: h_crack or h_void times size_tolerance); NGSolve "
+                             "bisects prisms across their triangles only: extrude the slab in more layers or "
+                             "make it thinner")
 
 
 def _per_element(values: np.ndarray, ne: int) -> np.ndarray:

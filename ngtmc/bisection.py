@@ -6,7 +6,13 @@ and carries its state over:
 
 * u: exactly. NGSolve's prolongation of a space with per-node orders is not exact for order 2
   (only the vertex part is; 0.026 error on a quadratic field, measured), so u is carried through
-  a uniform-order space with ``hoprolongation=True`` (exact on triangles and tetrahedra) and set back;
+  a uniform-order space with ``hoprolongation=True`` (exact on triangles and tetrahedra) and set back.
+  NGSolve has no ``hoprolongation`` on prisms of order 2 (it raises "H1Ho prism dual shapes only
+  implemented for order==1"), and their plain prolongation loses the quadratic part (0.021 on a
+  quadratic field, measured); so on prisms u is set on a copy of the mesh before the bisection and
+  set back from it across the two meshes afterwards, exact because the refined space holds the
+  old one (6e-15, measured; the prisms of :func:`ngtmc.extrude` are straight-sided, so the copy
+  has the same geometry; tests/test_adapt_prisms.py);
 * alpha (P1) by NGSolve's prolongation, exact: a bisection puts the new vertex at an edge midpoint
   where the P1 field is the mean of the edge's ends (on a curved boundary the new vertex is moved
   onto the geometry and keeps that value);
@@ -41,11 +47,21 @@ from .adapt import RefinementRecord, _per_element
 __all__ = ["refine", "replay", "transfer_history"]
 
 
-def _ancestors(mesh, ne_old: int) -> np.ndarray:
+def _ancestors(mesh, ne_old: int, before=None) -> np.ndarray:
     """For every element of the refined mesh, the element of the mesh before the refinement that
     contains it. A refined element keeps its number for one child; the others are appended, each
-    with a parent (possibly itself appended in the same refinement)."""
+    with a parent (possibly itself appended in the same refinement). With ``before`` (a copy of
+    the mesh before the refinement, for prisms, whose parents NGSolve does not record: it gave
+    parent numbers that overflowed, measured) the element of ``before`` that holds each new
+    element's centroid, which lies inside its ancestor."""
     ne = mesh.ne
+    if before is not None:
+        from .scene import element_vertices
+        c = np.asarray(mesh.ngmesh.Coordinates())[element_vertices(mesh)].mean(axis=1)
+        anc = np.asarray(before(c[:, 0], c[:, 1], c[:, 2])["nr"], dtype=np.int64)
+        if np.any(anc < 0) or np.any(anc >= ne_old) or np.any(anc[:ne_old] != np.arange(ne_old)):
+            raise RuntimeError("a refined element's centroid was not found in the mesh before the refinement")
+        return anc
     anc = np.arange(ne)
     parent = np.array([mesh.GetParentElement(ngs.ElementId(ngs.VOL, i)).nr for i in range(ne_old, ne)], dtype=np.int64)
     anc[ne_old:] = parent
@@ -70,6 +86,11 @@ def transfer_history(H_old: np.ndarray, ancestors: np.ndarray, ne_old: int, npts
     out[:ne_old][refined] = Hp[refined].max(axis=1, keepdims=True)
     out[ne_old:] = Hp[ancestors[ne_old:]].max(axis=1, keepdims=True)
     return out.ravel()
+
+
+def _prisms(mesh) -> bool:
+    """Whether ``mesh`` is 3D with prisms (:func:`ngtmc.adapt.check_solver`: then only prisms)."""
+    return mesh.dim == 3 and any(el.type == ngs.ET.PRISM for el in mesh.Elements(ngs.VOL))
 
 
 def _carrier_space(solver):
@@ -103,7 +124,8 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
     marked = np.asarray(marked, dtype=bool)
     if marked.shape != (ne_old,):
         raise ValueError(f"marked has shape {marked.shape}; the mesh has {ne_old} elements")
-    aux = _carrier_space(solver)
+    before = ngs.Mesh(mesh.ngmesh.Copy()) if _prisms(mesh) else None
+    aux = _carrier_space(solver) if before is None else ngs.VectorH1(before, order=solver.order)
     tmp_u = ngs.GridFunction(solver.fes_u)
 
     def carry_u(values):
@@ -127,7 +149,7 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
                     a_carriers[k, key] = carry_a(st[key])
     H_old = [solver.H_committed] + [st["H"] for st in states if "H" in st]
 
-    anc = _refine_mesh(solver, marked)
+    anc = _refine_mesh(solver, marked, before)
 
     npts = solver.irs.ndof // mesh.ne
     new_H = [transfer_history(h, anc, ne_old, npts) for h in H_old]
@@ -160,7 +182,7 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
     return record, out
 
 
-def _refine_mesh(solver, marked: np.ndarray) -> np.ndarray:
+def _refine_mesh(solver, marked: np.ndarray, before=None) -> np.ndarray:
     """Bisect the marked elements of the solver's mesh (NGSolve), curve it again at its order, let
     a density given per element follow the parents, and bring the solver to the new mesh
     (:meth:`~ngtmc.solver.Solver.mesh_changed`). Returns the ancestor of every new element in the
@@ -173,10 +195,12 @@ def _refine_mesh(solver, marked: np.ndarray) -> np.ndarray:
     curve = mesh.GetCurveOrder()
     for el in mesh.Elements(ngs.VOL):
         mesh.SetRefinementFlag(el, bool(marked[el.nr]))
+    if before is None and _prisms(mesh):
+        before = ngs.Mesh(mesh.ngmesh.Copy())
     mesh.Refine()
     if curve > 1:
         mesh.Curve(curve)
-    anc = _ancestors(mesh, ne_old)
+    anc = _ancestors(mesh, ne_old, before)
     if per_element_density:
         scene.density = rho_old[anc]
     solver.mesh_changed()
@@ -190,7 +214,8 @@ def replay(solver, elements: list) -> None:
     mesh, its element numbers and the dof numbering come out as in the run, and a state of the run
     (:meth:`~ngtmc.solver.Solver.get_state`) fits. Field values are not transferred: the caller
     sets the state afterwards. Raises ValueError when the marks do not fit the mesh."""
-    _carrier_space(solver)   # made on the first level, as in the run, for the refinements to come
+    if not _prisms(solver.mesh):
+        _carrier_space(solver)   # made on the first level, as in the run, for the refinements to come
     for k, idx in enumerate(elements):
         idx = np.asarray(idx, dtype=np.int64)
         ne = solver.mesh.ne

@@ -37,11 +37,20 @@ class ResolutionWarning(UserWarning):
 def element_vertices(mesh) -> np.ndarray:
     """Vertex numbers (0-based, NGSolve's) of every volume element of ``mesh``, in the order of
     the elements' numbers: array (mesh.ne, 3) of triangles in 2D, (mesh.ne, 4) of tetrahedra in
-    3D (the first four vertices of other 3D elements)."""
+    3D, (mesh.ne, 6) of prisms (a mesh of prisms only, :func:`ngtmc.extrude`: the bottom triangle,
+    then the top one); the first four vertices of the elements of other 3D meshes."""
     ng = mesh.ngmesh
     if mesh.dim == 2:
         return ng.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
-    return ng.Elements3D().NumPy()["nodes"][:, :4].astype(int) - 1
+    nodes = ng.Elements3D().NumPy()["nodes"].astype(int) - 1   # as wide as the widest element
+    if nodes.shape[1] == 6 and nodes.size and nodes[:, 4:].min() >= 0:   # prisms only (no padding)
+        return nodes
+    return nodes[:, :4]
+
+
+#: the edges of a prism by its vertices (:func:`element_vertices`): the two triangles, then the
+#: three vertical edges (its quadrilateral faces' diagonals are not edges)
+PRISM_EDGES = ((0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5))
 
 
 @dataclass(frozen=True)
@@ -249,12 +258,14 @@ class Scene:
         return element_vertices(self.mesh)
 
     def element_sizes(self) -> np.ndarray:
-        """Longest edge of every element, mm (array of length mesh.ne)."""
+        """Longest edge of every element, mm (array of length mesh.ne). A prism's quadrilateral
+        faces have no diagonal edge: until 2026-12-05 their diagonals counted, and a slab of
+        prisms as thick as its triangles were wide measured up to 1.41 times its size."""
         pts = np.asarray(self.mesh.ngmesh.Coordinates())
         nodes = self.element_vertices()
         h = np.zeros(len(nodes))
         k = nodes.shape[1]
-        for i in range(k):
-            for j in range(i + 1, k):
-                h = np.maximum(h, np.linalg.norm(pts[nodes[:, i]] - pts[nodes[:, j]], axis=1))
+        pairs = PRISM_EDGES if k == 6 else [(i, j) for i in range(k) for j in range(i + 1, k)]
+        for i, j in pairs:
+            h = np.maximum(h, np.linalg.norm(pts[nodes[:, i]] - pts[nodes[:, j]], axis=1))
         return h

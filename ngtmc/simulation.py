@@ -191,7 +191,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
         self._remesher = None
         if adapt is not None:
             from .adapt import check_solver
-            check_solver(self.solver, remesh=adapt.remesh_maxh is not None)
+            check_solver(self.solver, remesh=adapt.remesh_maxh is not None, adapt=adapt)
             if adapt.remesh_maxh is not None:
                 from .remesh import Remesher
                 self._remesher = Remesher(scene.mesh, adapt.remesh_maxh)

@@ -126,9 +126,18 @@ crack run at 0.0669 mm and 3.88 N after 41 steps, 238 iterations and 4757 s, 250
 Adaptive refinement of the hemisphere (``--set h_crack``, measured 2026-12-05)
 ----------------------------------------------------------------------------
 ``--set parts=hemisphere --set h_crack=H`` refines the hemisphere's tetrahedra by bisection
-during the run (:class:`ngtmc.Adaptivity`, docs/adaptivity.md); the slab, one layer of prisms,
-cannot be bisected and is refused with ``h_crack`` (its 2D twin is refined by the 2D study), and so
-is refinement by remeshing (2D only). Quick, from a coarse band (``sphere_h_band=0.08``, l0;
+during the run (:class:`ngtmc.Adaptivity`, docs/adaptivity.md); refinement by remeshing (2D only)
+is refused. With ``h_crack`` the slab's prisms are bisected too, across their triangles only (the
+slab keeps its one layer), and its 2D twin's triangles the same way: ``slab_thickness`` must then
+be at most ``h_crack`` times ``amr_size_tolerance`` (checked before any case runs). On the notched
+plate of ``tests/test_adapt_prisms.py`` the refined slab follows its refined 2D twin element for
+element, its forces to solver precision. This study's slab (``MEASURED["quick_slab_amr_2026_12_05"]``;
+``--set parts=slab --set h_band=0.06 --set slab_thickness=0.015 --set h_crack=0.015 --set
+amr_size_tolerance=1.41 --set stop_after_drop=0.5``, two threads, alone): from 1466 elements in
+the plane, both refine to 1965 by the peak; the slab peaks at 0.561684 N at 0.09376 mm, its 2D
+twin at 0.561662 N at 0.093759 mm (**+0.004 %**; the twin -0.15 % against the 2D study's quick
+band, 37.499 N/mm times 0.015 mm). To half the peak: 136 and 122 steps, 785 and 772 Newton
+iterations, 5939 and 5851 elements, 654 and 155 s (2026-12-05). Quick, from a coarse band (``sphere_h_band=0.08``, l0;
 6638 tetrahedra) to ``h_crack=0.04`` (l0/2) with ``amr_size_tolerance=1.41``, one thread beside
 two other runs (``MEASURED["quick_hemisphere_quarter_amr_2026_12_05"]``): peak **6.0642 N at 0.0700
 mm**, -2.0 % against the quick band's 6.1871 N and +0.6 % against medium's 6.0307 N, after 35
@@ -267,6 +276,18 @@ MEASURED: dict = {
                                  "note": "void regularised within sphere_regularised_radius = 0.25 mm; dissipation "
                                          "steps sized before their solve (coupled prescale); alone, 2026-12-04 "
                                          "12:54; command 255.5 s (docs/three-d.md)"},
+    "quick_slab_amr_2026_12_05": {
+        "n_elements_start": 1466, "h_band": 0.06, "slab_thickness": 0.015, "h_crack": 0.015,
+        "amr_size_tolerance": 1.41, "peak_force": 0.561684, "peak_load": 0.09376, "n_elements_at_peak": 1965,
+        "ndof_u_at_peak_plus_alpha": 10208, "steps": 136, "newton_iterations": 785, "cutbacks": 5,
+        "n_elements_end": 5939, "wall_time_s": 654, "threads": 2,
+        "twin_2d": {"peak_force": 0.561662, "peak_load": 0.093759, "n_elements_at_peak": 1965, "steps": 122,
+                    "newton_iterations": 772, "cutbacks": 5, "n_elements_end": 5851, "wall_time_s": 155},
+        "peak_force_vs_2d": 0.0000392,
+        "status": "stopped at half the peak (stop_after_drop = 0.5)",
+        "note": "ngtmc run three-point-bending-3d --set parts=slab --set h_band=0.06 --set slab_thickness=0.015 "
+                "--set h_crack=0.015 --set amr_size_tolerance=1.41 --set stop_after_drop=0.5 --threads 2; alone; "
+                "forces in N for 0.015 mm of thickness"},
     "quick_hemisphere_quarter_amr_2026_12_05": {
         "n_elements_start": 6638, "sphere_h_band": 0.08, "h_crack": 0.04, "amr_size_tolerance": 1.41,
         "peak_force": 6.0642, "peak_load": 0.0700, "n_elements_at_peak": 45220, "ndof_u_at_peak": 42436,
@@ -350,13 +371,16 @@ def check_parameters(p: dict):
     if p.get("sphere_symmetry", "quarter") not in ("half", "quarter"):
         raise StudyError(f"three_point_bending_3d: sphere_symmetry = {p.get('sphere_symmetry')!r} is not 'half' "
                          "or 'quarter'")
-    if float(p.get("h_crack", 0.0) or 0.0) > 0 and p.get("parts", "all") != "hemisphere":
-        # refused before any case runs: the 2D twin alone would refine, and the slab (prisms)
-        # would then fail (ngtmc.adapt.check_solver)
-        raise StudyError(f"three_point_bending_3d: h_crack = {p['h_crack']!r} mm asks for adaptive refinement, which "
-                         "bisects triangles and tetrahedra: the hemisphere's mesh, not the slab's one layer of "
-                         "prisms. Run --set parts=hemisphere with h_crack, and for a refined slab its 2D twin: "
-                         "ngtmc run three-point-bending --set h_crack=...")
+    h_crack = float(p.get("h_crack", 0.0) or 0.0)
+    if h_crack > 0 and p.get("parts", "all") != "hemisphere":
+        # refused before any case runs (the 2D twin would run first): NGSolve bisects the slab's
+        # prisms across their triangles only (ngtmc.adapt.check_solver)
+        smallest = h_crack * float(p.get("amr_size_tolerance", 1.0))
+        if float(p["slab_thickness"]) > smallest * (1.0 + 1e-9):
+            raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm is more than the "
+                             f"size the slab is refined to (h_crack times amr_size_tolerance = {smallest:g} mm); "
+                             "its one layer of prisms is bisected across its triangles only: set slab_thickness "
+                             "to at most that")
     if float(p.get("amr_remesh_maxh", 0.0) or 0.0) > 0:
         raise StudyError("three_point_bending_3d: amr_remesh_maxh > 0 asks for refinement by remeshing, which is "
                          "2D only; the hemisphere is refined by bisection (amr_remesh_maxh = 0)")

@@ -1,13 +1,13 @@
 """Adaptive refinement of tetrahedral meshes (ngtmc.adapt, ngtmc.bisection in 3D): the transfer
 loses nothing (H and alpha never decrease), reproduces a homogeneous state and an order-2 field
 exactly, keeps a curved boundary curved, and the re-solved steps converge and agree with a mesh
-refined beforehand; prisms and 3D remeshing are refused."""
+refined beforehand; hexahedra and 3D remeshing are refused (prisms: tests/test_adapt_prisms.py)."""
 import dataclasses
 
 import numpy as np
 import ngsolve as ngs
 import pytest
-from netgen.occ import Box, OCCGeometry, Pnt, Sphere, X, Y, Z
+from netgen.occ import Box, OCCGeometry, Pnt, Rectangle, Sphere, X, Y, Z
 
 import ngtmc
 from ngtmc import adapt
@@ -193,16 +193,24 @@ def test_refined_resolve_converges_on_tetrahedra_and_agrees_with_a_mesh_refined_
     assert 'id="section3d-0"' in page and 'id="section3d-1"' in page and "surface triangles" in page
 
 
-def test_prisms_and_remeshing_in_3d_are_refused():
+def test_hexahedra_and_remeshing_in_3d_are_refused():
+    """Bisection needs triangles, tetrahedra or prisms, one kind (tests/test_adapt_prisms.py): a
+    slab with hexahedra (a quadrilateral-dominated mesh extruded) is refused, and so is remeshing
+    in 3D."""
     sched = ngtmc.Schedule([0.0, 1e-3])
     control = ngtmc.AdaptiveStepControl(du_max=1e-3)
     with pytest.raises(ValueError, match="remeshing.*2D meshes only"):
         ngtmc.Simulation(notched_block(), sched, control, adapt=Adaptivity(h_crack=0.05, remesh_maxh=0.25))
-    from scenes import bar_mesh
-    slab = ngtmc.Scene(ngtmc.extrude(bar_mesh(maxh=0.1), 0.1), {"bar": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
+    face = Rectangle(1, 0.2).Face()
+    face.faces.name = "bar"
+    face.edges.Min(X).name = "left"
+    face.edges.Max(X).name = "right"
+    quads = ngs.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=0.1, quad_dominated=True))
+    assert ngs.ET.QUAD in {el.type for el in quads.Elements(ngs.VOL)}   # (a few triangles too)
+    slab = ngtmc.Scene(ngtmc.extrude(quads, 0.05), {"bar": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
                        supports=[ngtmc.Support("left", x=True, y=True, z=True)],
                        load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="bar")
-    with pytest.raises(ValueError, match="triangles.*tetrahedra.*slab of prisms"):
+    with pytest.raises(ValueError, match="triangles.*tetrahedra or of prisms"):
         ngtmc.Simulation(slab, sched, control, adapt=Adaptivity(h_crack=0.05))
 
 

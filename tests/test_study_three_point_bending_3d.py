@@ -27,10 +27,12 @@ def test_the_study_is_registered_and_refuses_bad_parts():
     _, p = study_parameters(study, "quick", {"sphere_radius": 0.6})
     with pytest.raises(StudyError, match="sphere_radius"):
         study.cases(p)
-    for parts in ("all", "slab"):   # the slab's prisms cannot be bisected: refused before any case runs
-        _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": parts})
-        with pytest.raises(StudyError, match="h_crack.*prisms.*parts=hemisphere"):
+    for parts in ("all", "slab"):   # a slab thicker than h_crack: refused before any case runs
+        _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": parts})   # quick: 0.03 mm thick
+        with pytest.raises(StudyError, match="slab_thickness = 0.03 mm.*h_crack"):
             study.cases(p)
+    _, p = study_parameters(study, "quick", {"h_crack": 0.02, "parts": "slab", "slab_thickness": 0.02})
+    assert [c.options["adapt"].h_crack for c in study.cases(p)] == [0.02, 0.02]   # the 2D twin and the slab
     _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": "hemisphere", "amr_remesh_maxh": 0.5})
     with pytest.raises(StudyError, match="remeshing.*2D only"):
         study.cases(p)
