@@ -117,3 +117,77 @@ def refined_twice_from_homogeneous(s, seed, load=2e-3):
     for _ in range(2):
         adapt.refine(s, rng.random(s.mesh.ne) < 0.3)
     return e0, f0, H0, s.energies(), s.reaction()
+
+
+def refine_and_check_the_transfer_in_3d(s, adapt_settings):
+    """Mark and refine the damaged 3D solver ``s`` once (``adapt_settings``: an Adaptivity), and
+    check that nothing heals: every child of a refined element has at least its parent's largest
+    H at every point (the parent located by the child's centroid in a copy of the old mesh), the
+    elements not refined keep their values, and alpha at every new vertex is the old field there.
+    Returns the number of elements marked."""
+    import numpy as np
+    import ngsolve as ngs
+    import pytest
+    from ngtmc import adapt
+    assert s.mesh.dim == 3 and np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
+    old_mesh = ngs.Mesh(s.mesh.ngmesh.Copy())
+    ne_old = s.mesh.ne
+    H_old = s.H_committed.copy().reshape(ne_old, -1)
+    a_old = ngs.GridFunction(ngs.H1(old_mesh, order=1))
+    a_old.vec.FV().NumPy()[:] = s.alpha_committed
+    marked = adapt.mark(s, adapt_settings)
+    assert 0 < marked.sum() < ne_old
+    adapt.refine(s, marked)
+    assert s.mesh.ne > ne_old and s.mesh.dim == 3
+    coords = np.asarray(s.mesh.ngmesh.Coordinates())
+    centroid = np.array([coords[[v.nr for v in el.vertices]].mean(axis=0) for el in s.mesh.Elements(ngs.VOL)])
+    owner = np.array([old_mesh(*c).nr for c in centroid])
+    assert np.all(owner >= 0)
+    refined = np.zeros(ne_old, dtype=bool)
+    refined[owner[ne_old:]] = True
+    child = refined[owner]
+    H_new = s.H_committed.reshape(s.mesh.ne, -1)
+    assert np.all(H_new[child] >= H_old[owner[child]].max(axis=1, keepdims=True) * (1 - 1e-15))
+    np.testing.assert_array_equal(H_new[:ne_old][~refined], H_old[~refined])   # not refined: kept
+    for v in range(s.mesh.nv):
+        (dof,) = s.fes_a.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))
+        assert s.alpha_committed[dof] == pytest.approx(a_old(old_mesh(*coords[v])), abs=1e-14)
+    return int(marked.sum())
+
+
+def homogeneous_state_kept_in_3d(s, order, load=2e-3):
+    """:func:`refined_twice_from_homogeneous` on a 3D solver and its checks: energies, reaction
+    and H to 1e-10 (the order-2 Newton solution's own noise: 3.8e-11 relative in the elastic
+    energy, measured on tetrahedra), and u still the equilibrium to the Newton's tolerance: in 3D
+    the carried boundary values differ from their target by round-off (a few 1e-16 mm), which
+    costs one lifting iteration where 2D needs none; it moves u by less than the Newton's relative
+    tolerance (8e-10 measured, order 2)."""
+    import numpy as np
+    import pytest
+    from ngtmc.displacement_newton import DISPLACEMENT_RTOL
+    e0, f0, H0, e1, f1 = refined_twice_from_homogeneous(s, order, load)
+    assert np.ptp(H0) < 1e-10 * H0.max()
+    for k in e0:
+        assert e1[k] == pytest.approx(e0[k], rel=1e-10, abs=1e-300)
+    assert f1 == pytest.approx(f0, rel=1e-10)
+    np.testing.assert_allclose(s.H_committed, H0.max(), rtol=1e-10)
+    u1 = s.u.vec.FV().NumPy().copy()
+    res = s.solve_displacement(load)
+    assert res.converged and res.iterations <= 1
+    assert np.linalg.norm(s.u.vec.FV().NumPy() - u1) <= DISPLACEMENT_RTOL * np.linalg.norm(u1)
+
+
+def plain_prolongation_error(mesh, field, order=2):
+    """The trap of NGSolve's plain prolongation: ``field`` (a vector CoefficientFunction) set in
+    a VectorH1 space of ``order`` on ``mesh``, every other element bisected (``mesh.Refine()``,
+    the mesh changed in place), the GridFunction updated by NGSolve; returns its L2 error (mm
+    times the field's unit)."""
+    import ngsolve as ngs
+    g = ngs.GridFunction(ngs.VectorH1(mesh, order=order))
+    g.Set(field)
+    for el in mesh.Elements(ngs.VOL):
+        mesh.SetRefinementFlag(el, el.nr % 2 == 0)
+    mesh.Refine()
+    g.space.Update()
+    g.Update()
+    return float(ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), mesh)))

@@ -12,8 +12,7 @@ from netgen.occ import Box, OCCGeometry, Pnt, Rectangle, Sphere, X, Y, Z
 import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
-from ngtmc.displacement_newton import DISPLACEMENT_RTOL
-from scenes import refined_twice_from_homogeneous
+from scenes import damaged, homogeneous_state_kept_in_3d, plain_prolongation_error, refine_and_check_the_transfer_in_3d
 
 
 def _block_mesh(maxh=0.25, notch=0.3, thickness=0.2):
@@ -42,41 +41,8 @@ def notched_block(maxh=0.25, l0=0.1, thickness=0.2, **kw):
                        fracture_regions="block", **kw)
 
 
-def _damaged_block():
-    s = ngtmc.Solver(notched_block(), compile=True)
-    for load in (0.004, 0.006, 0.007):
-        s.solve_phase_field()
-        assert s.solve_displacement(load).converged
-        s.update_history()
-    return s
-
-
 def test_history_and_alpha_never_decrease_across_refinement_of_tetrahedra():
-    s = _damaged_block()
-    assert s.mesh.dim == 3 and np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
-    old_mesh = ngs.Mesh(s.mesh.ngmesh.Copy())
-    ne_old = s.mesh.ne
-    H_old = s.H_committed.copy().reshape(ne_old, -1)
-    fes_a_old = ngs.H1(old_mesh, order=1)
-    a_old = ngs.GridFunction(fes_a_old)
-    a_old.vec.FV().NumPy()[:] = s.alpha_committed
-    marked = adapt.mark(s, Adaptivity(h_crack=0.08, alpha_threshold=0.02))
-    assert 0 < marked.sum() < ne_old
-    adapt.refine(s, marked)
-    assert s.mesh.ne > ne_old and s.mesh.dim == 3
-    # H: every new point at least the largest old value of the old element holding the new one
-    # (located by the new element's centroid)
-    coords = np.asarray(s.mesh.ngmesh.Coordinates())
-    centroid = np.array([coords[[v.nr for v in el.vertices]].mean(axis=0) for el in s.mesh.Elements(ngs.VOL)])
-    owner = np.array([old_mesh(*c).nr for c in centroid])
-    assert np.all(owner >= 0)
-    H_new = s.H_committed.reshape(s.mesh.ne, -1)
-    assert np.all(H_new >= H_old[owner].max(axis=1, keepdims=True) * (1 - 1e-15))
-    np.testing.assert_array_equal(H_new[:ne_old][~marked], H_old[~marked])   # not refined: kept
-    # alpha (P1): at every new vertex, the old field there (exactly)
-    for v in range(s.mesh.nv):
-        (dof,) = s.fes_a.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))
-        assert s.alpha_committed[dof] == pytest.approx(a_old(old_mesh(*coords[v])), abs=1e-14)
+    refine_and_check_the_transfer_in_3d(damaged(notched_block()), Adaptivity(h_crack=0.08, alpha_threshold=0.02))
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -89,22 +55,7 @@ def test_homogeneous_state_is_reproduced_exactly_on_tetrahedra(order):
                         supports=[ngtmc.Support("left", x=True), ngtmc.Support("bottom", y=True),
                                   ngtmc.Support("back", z=True)],
                         load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="block", order=order)
-    s = ngtmc.Solver(scene, compile=True)
-    e0, f0, H0, e1, f1 = refined_twice_from_homogeneous(s, order)
-    assert np.ptp(H0) < 1e-10 * H0.max()
-    # to the Newton solution's own noise: with order 2 its edge dofs are zero only to the
-    # solver's tolerance (3.8e-11 relative in the elastic energy, measured)
-    for k in e0:
-        assert e1[k] == pytest.approx(e0[k], rel=1e-10, abs=1e-300)
-    assert f1 == pytest.approx(f0, rel=1e-10)
-    np.testing.assert_allclose(s.H_committed, H0.max(), rtol=1e-10)
-    # still the equilibrium, to the Newton's tolerance: in 3D the carried boundary values differ
-    # from their target by round-off (a few 1e-16 mm), which costs one lifting iteration where 2D
-    # needs none; it moves u by less than the Newton's relative tolerance (8e-10 measured, order 2)
-    u1 = s.u.vec.FV().NumPy().copy()
-    res = s.solve_displacement(2e-3)
-    assert res.converged and res.iterations <= 1
-    assert np.linalg.norm(s.u.vec.FV().NumPy() - u1) <= DISPLACEMENT_RTOL * np.linalg.norm(u1)
+    homogeneous_state_kept_in_3d(ngtmc.Solver(scene, compile=True), order)
 
 
 def test_order_two_field_is_transferred_exactly_on_tetrahedra():
@@ -113,15 +64,7 @@ def test_order_two_field_is_transferred_exactly_on_tetrahedra():
     ``hoprolongation`` space, exact on tetrahedra) keeps a quadratic field exactly."""
     x, y, z = ngs.x, ngs.y, ngs.z
     field = ngs.CF((1e-3 * x * y, -2e-3 * z * z, 1e-3 * x * x))
-    plain_mesh = _block_mesh(maxh=0.4, notch=None)
-    g = ngs.GridFunction(ngs.VectorH1(plain_mesh, order=2))
-    g.Set(field)
-    for el in plain_mesh.Elements(ngs.VOL):
-        plain_mesh.SetRefinementFlag(el, el.nr % 2 == 0)
-    plain_mesh.Refine()
-    g.space.Update()
-    g.Update()
-    assert ngs.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), plain_mesh)) > 1e-6
+    assert plain_prolongation_error(_block_mesh(maxh=0.4, notch=None), field) > 1e-6
     scene = ngtmc.Scene(_block_mesh(maxh=0.4, notch=None), {"block": ngtmc.Material(1000.0, 0.3)},
                         supports=[ngtmc.Support("bottom", x=True, y=True, z=True)],
                         load=ngtmc.DisplacementLoad("top", "y"), order=2)

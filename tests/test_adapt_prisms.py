@@ -13,7 +13,8 @@ import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
 from ngtmc.extrude import plane_strain_slab
-from scenes import damaged, notched_plate, refined_twice_from_homogeneous
+from scenes import (damaged, homogeneous_state_kept_in_3d, notched_plate, plain_prolongation_error,
+                    refine_and_check_the_transfer_in_3d)
 
 
 def _square(maxh=0.3):
@@ -35,14 +36,7 @@ def test_prisms_are_bisected_across_their_triangles_and_an_order_two_field_is_ca
     slab = ngtmc.extrude(_square(), 0.1)
     with pytest.raises(Exception, match="only implemented for order==1"):
         ngs.VectorH1(slab, order=2, hoprolongation=True)
-    g = ngs.GridFunction(ngs.VectorH1(slab, order=2))
-    g.Set(field)
-    for el in slab.Elements(ngs.VOL):
-        slab.SetRefinementFlag(el, el.nr % 2 == 0)
-    slab.Refine()
-    g.space.Update()
-    g.Update()
-    plain = np.sqrt(ngs.Integrate(ngs.InnerProduct(g - field, g - field), slab))
+    plain = plain_prolongation_error(slab, field)
     assert plain > 1e-4 * 1e-3   # silently inexact
 
     scene = ngtmc.Scene(ngtmc.extrude(_square(), 0.1), {"plate": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
@@ -60,32 +54,10 @@ def test_prisms_are_bisected_across_their_triangles_and_an_order_two_field_is_ca
 
 
 def test_history_and_alpha_never_decrease_across_refinement_of_prisms():
+    """H varies within a prism (its strain is not constant), so only the children of a refined
+    prism are bounded below by their parent's largest value."""
     s = damaged(plane_strain_slab(notched_plate(maxh=0.2, h_band=0.2, l0=0.1), 0.05))
-    assert np.ptp(s.H_committed) > 0 and s.max_alpha() > 0.01
-    old_mesh = ngs.Mesh(s.mesh.ngmesh.Copy())
-    ne_old = s.mesh.ne
-    H_old = s.H_committed.copy().reshape(ne_old, -1)
-    a_old = ngs.GridFunction(ngs.H1(old_mesh, order=1))
-    a_old.vec.FV().NumPy()[:] = s.alpha_committed
-    marked = adapt.mark(s, Adaptivity(h_crack=0.1, alpha_threshold=0.02))
-    assert 0 < marked.sum() < ne_old
-    adapt.refine(s, marked)
-    assert s.mesh.ne > ne_old
-    coords = np.asarray(s.mesh.ngmesh.Coordinates())
-    centroid = np.array([coords[[v.nr for v in el.vertices]].mean(axis=0) for el in s.mesh.Elements(ngs.VOL)])
-    owner = np.array([old_mesh(*c).nr for c in centroid])
-    H_new = s.H_committed.reshape(s.mesh.ne, -1)
-    # every child of a refined prism at least its parent's largest value (H varies within a prism:
-    # its strain is not constant), the prisms not refined keep their values
-    refined = np.zeros(ne_old, dtype=bool)
-    refined[owner[ne_old:]] = True
-    child = refined[owner]
-    assert child.sum() > refined.sum() > 0
-    assert np.all(H_new[child] >= H_old[owner[child]].max(axis=1, keepdims=True) * (1 - 1e-15))
-    np.testing.assert_array_equal(H_new[:ne_old][~refined], H_old[~refined])
-    for v in range(s.mesh.nv):
-        (dof,) = s.fes_a.GetDofNrs(ngs.NodeId(ngs.VERTEX, v))
-        assert s.alpha_committed[dof] == pytest.approx(a_old(old_mesh(*coords[v])), abs=1e-14)
+    refine_and_check_the_transfer_in_3d(s, Adaptivity(h_crack=0.1, alpha_threshold=0.02))
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -94,14 +66,7 @@ def test_homogeneous_state_is_reproduced_exactly_on_prisms(order):
                         supports=[ngtmc.Support("left", x=True), ngtmc.Support("bottom", y=True),
                                   ngtmc.Support("front", z=True)],
                         load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="plate", order=order)
-    s = ngtmc.Solver(scene, compile=True)
-    e0, f0, H0, e1, f1 = refined_twice_from_homogeneous(s, order)
-    assert np.ptp(H0) < 1e-10 * H0.max()
-    for k in e0:
-        assert e1[k] == pytest.approx(e0[k], rel=1e-10, abs=1e-300)
-    assert f1 == pytest.approx(f0, rel=1e-10)
-    np.testing.assert_allclose(s.H_committed, H0.max(), rtol=1e-10)
-    assert s.solve_displacement(2e-3).iterations <= 1
+    homogeneous_state_kept_in_3d(ngtmc.Solver(scene, compile=True), order)
 
 
 def test_a_refined_slab_follows_its_refined_2d_twin_element_for_element():
