@@ -92,6 +92,38 @@ def test_a_refined_slab_follows_its_refined_2d_twin_element_for_element():
     np.testing.assert_allclose(h3["force"][:n] / t, h2["force"][:n], rtol=0, atol=1e-7 * F)
 
 
+def test_an_interrupted_refined_slab_resumes_on_its_refined_mesh(tmp_path):
+    """A resume replays the recorded refinements on the initial slab (bisection of prisms, their
+    ancestors located in a copy of the mesh) and goes on from the checkpoint to the history and
+    snapshots of the run that was not interrupted (measured: equal to the last bit)."""
+    def run(out, **kw):
+        scene = plane_strain_slab(notched_plate(maxh=0.2, h_band=0.2, l0=0.1), 0.05)
+        return ngtmc.simulate(scene, ngtmc.Schedule([0.0, 0.0065]),
+                              ngtmc.AdaptiveStepControl(du_max=5e-4, k_u=0.0, du_min=1e-7), out_dir=out,
+                              adapt=Adaptivity(h_crack=0.07), report=False, progress=False, threads=1,
+                              checkpoint_every=1, compile=True, snapshot_loads=[0.004, 0.006], **kw).history
+    ref = run(tmp_path / "ref")
+    assert ref["elements"].iloc[-1] > 4 * ref["elements"].iloc[0]
+    stop_step = int(ref.index[ref["elements"] > ref["elements"].iloc[0]][0]) + 1
+
+    def stop(sim, row):
+        if row["step"] == stop_step:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path / "run", callbacks=[stop])
+    seen = []
+    h = run(tmp_path / "run", resume=True, callbacks=[lambda sim, row: seen.append(row["step"])])
+    assert seen[0] == stop_step + 1 and len(h) == len(ref)
+    for col in ("load", "force", "dissipated_energy", "elements", "dofs", "newton_iterations"):
+        np.testing.assert_allclose(h[col].to_numpy(dtype=float), ref[col].to_numpy(dtype=float),
+                                   rtol=1e-9, atol=1e-12, err_msg=col)
+    z, z_ref = np.load(tmp_path / "run" / "snapshots.npz"), np.load(tmp_path / "ref" / "snapshots.npz")
+    assert sorted(z.files) == sorted(z_ref.files)
+    for k in z.files:
+        np.testing.assert_allclose(z[k], z_ref[k], rtol=1e-9, atol=1e-12, err_msg=k)
+
+
 def test_a_slab_taller_than_its_target_is_refused():
     scene = plane_strain_slab(notched_plate(maxh=0.2, h_band=0.2, l0=0.1), 0.15)
     with pytest.raises(ValueError, match="prisms are up to 0.15 mm tall"):
