@@ -129,7 +129,8 @@ Adaptive refinement of the hemisphere (``--set h_crack``, measured 2026-12-05)
 during the run (:class:`ngtmc.Adaptivity`, docs/adaptivity.md); refinement by remeshing (2D only)
 is refused. With ``h_crack`` the slab's prisms are bisected too, across their triangles only (the
 slab keeps its one layer), and its 2D twin's triangles the same way: ``slab_thickness`` must then
-be at most ``h_crack`` times ``amr_size_tolerance`` (checked before any case runs). On the notched
+be at most ``h_crack`` (and ``amr_h_void``, if set) times ``amr_size_tolerance`` (checked before
+any case runs). On the notched
 plate of ``tests/test_adapt_prisms.py`` the refined slab follows its refined 2D twin element for
 element, its forces to solver precision. This study's slab (``MEASURED["quick_slab_amr_2026_12_05"]``;
 ``--set parts=slab --set h_band=0.06 --set slab_thickness=0.015 --set h_crack=0.015 --set
@@ -375,12 +376,13 @@ def check_parameters(p: dict):
     if h_crack > 0 and p.get("parts", "all") != "hemisphere":
         # refused before any case runs (the 2D twin would run first): NGSolve bisects the slab's
         # prisms across their triangles only (ngtmc.adapt.check_solver)
-        smallest = h_crack * float(p.get("amr_size_tolerance", 1.0))
+        h_void = float(p.get("amr_h_void", 0.0) or 0.0)
+        smallest = min(h_crack, h_void if h_void > 0 else h_crack) * float(p.get("amr_size_tolerance", 1.0))
         if float(p["slab_thickness"]) > smallest * (1.0 + 1e-9):
             raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm is more than the "
-                             f"size the slab is refined to (h_crack times amr_size_tolerance = {smallest:g} mm); "
-                             "its one layer of prisms is bisected across its triangles only: set slab_thickness "
-                             "to at most that")
+                             f"size the slab is refined to (h_crack or amr_h_void times amr_size_tolerance = "
+                             f"{smallest:g} mm); its one layer of prisms is bisected across its triangles only: "
+                             "set slab_thickness to at most that")
     if float(p.get("amr_remesh_maxh", 0.0) or 0.0) > 0:
         raise StudyError("three_point_bending_3d: amr_remesh_maxh > 0 asks for refinement by remeshing, which is "
                          "2D only; the hemisphere is refined by bisection (amr_remesh_maxh = 0)")

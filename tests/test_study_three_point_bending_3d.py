@@ -31,6 +31,10 @@ def test_the_study_is_registered_and_refuses_bad_parts():
         _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": parts})   # quick: 0.03 mm thick
         with pytest.raises(StudyError, match="slab_thickness = 0.03 mm.*h_crack"):
             study.cases(p)
+    _, p = study_parameters(study, "quick", {"h_crack": 0.02, "parts": "slab", "slab_thickness": 0.02,
+                                             "amr_h_void": 0.01})
+    with pytest.raises(StudyError, match="slab_thickness = 0.02 mm.*amr_h_void"):
+        study.cases(p)
     _, p = study_parameters(study, "quick", {"h_crack": 0.02, "parts": "slab", "slab_thickness": 0.02})
     assert [c.options["adapt"].h_crack for c in study.cases(p)] == [0.02, 0.02]   # the 2D twin and the slab
     _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": "hemisphere", "amr_remesh_maxh": 0.5})
