@@ -123,24 +123,27 @@ medium, -4.3 % against quick), after 35 steps and 144 Newton iterations in 2565 
 crack run at 0.0669 mm and 3.88 N after 41 steps, 238 iterations and 4757 s, 2504 MB at its peak
 (docs/three-d.md). The rest of the crack run is not measured.
 
-Adaptive refinement of the hemisphere (``--set h_crack``, measured 2026-12-05)
-----------------------------------------------------------------------------
-``--set parts=hemisphere --set h_crack=H`` refines the hemisphere's tetrahedra by bisection
-during the run (:class:`ngtmc.Adaptivity`, docs/adaptivity.md); refinement by remeshing (2D only)
-is refused. With ``h_crack`` the slab's prisms are bisected too, across their triangles only (the
-slab keeps its one layer), and its 2D twin's triangles the same way: ``slab_thickness`` must then
-be at most ``h_crack`` (and ``amr_h_void``, if set) times ``amr_size_tolerance`` (checked before
-any case runs). On the notched
-plate of ``tests/test_adapt_prisms.py`` the refined slab follows its refined 2D twin element for
-element, its forces to solver precision. This study's slab (``MEASURED["quick_slab_amr_2026_12_05"]``;
-``--set parts=slab --set h_band=0.06 --set slab_thickness=0.015 --set h_crack=0.015 --set
-amr_size_tolerance=1.41 --set stop_after_drop=0.5``, two threads, alone): from 1466 elements in
-the plane, both refine to 1965 by the peak; the slab peaks at 0.561684 N at 0.09376 mm, its 2D
-twin at 0.561662 N at 0.093759 mm (**+0.004 %**; the twin -0.15 % against the 2D study's quick
-band, 37.499 N/mm times 0.015 mm). To half the peak: 136 and 122 steps, 785 and 772 Newton
-iterations, 5939 and 5851 elements, 654 and 155 s (2026-12-05). Quick, from a coarse band (``sphere_h_band=0.08``, l0;
-6638 tetrahedra) to ``h_crack=0.04`` (l0/2) with ``amr_size_tolerance=1.41``, one thread beside
-two other runs (``MEASURED["quick_hemisphere_quarter_amr_2026_12_05"]``): peak **6.0642 N at 0.0700
+Adaptive refinement (``--set h_crack``, measured 2026-12-05)
+----------------------------------------------------------
+With ``h_crack`` the cases refine by bisection during the run (:class:`ngtmc.Adaptivity`,
+docs/adaptivity.md); refinement by remeshing (2D only) is refused.
+
+(a) The slab's prisms are bisected across their triangles only (the slab keeps its one layer),
+and its 2D twin's triangles the same way: ``slab_thickness`` must then be at most ``h_crack`` (and
+``amr_h_void``, if set) times ``amr_size_tolerance`` (checked before any case runs). On the
+notched plate of ``tests/test_adapt_prisms.py`` the refined slab follows its refined 2D twin
+element for element, its forces to solver precision. This study's slab
+(``MEASURED["quick_slab_amr_2026_12_05"]``; ``--set parts=slab --set h_band=0.06 --set
+slab_thickness=0.015 --set h_crack=0.015 --set amr_size_tolerance=1.41 --set
+stop_after_drop=0.5``, two threads, alone): from 1466 elements in the plane, both refine to 1965
+by the peak; the slab peaks at 0.561684 N at 0.09376 mm, its 2D twin at 0.561662 N at 0.093759
+mm (**+0.004 %**; the twin -0.15 % against the 2D study's quick band, 37.499 N/mm times 0.015
+mm). To half the peak: 136 and 122 steps, 785 and 772 Newton iterations, 5939 and 5851
+elements, 654 and 155 s.
+
+(b) ``--set parts=hemisphere --set h_crack=H`` refines the hemisphere's tetrahedra. Quick, from a
+coarse band (``sphere_h_band=0.08``, l0; 6638 tetrahedra) to ``h_crack=0.04`` (l0/2) with
+``amr_size_tolerance=1.41``, one thread beside two other runs (``MEASURED["quick_hemisphere_quarter_amr_2026_12_05"]``): peak **6.0642 N at 0.0700
 mm**, -2.0 % against the quick band's 6.1871 N and +0.6 % against medium's 6.0307 N, after 35
 steps and 186 Newton iterations in 694 s; but with **45220 tetrahedra at the peak**, against
 10767 (quick band, l0/2) and 31179 (medium band, l0/3): the AT-2 damage before the peak is broad,
@@ -280,7 +283,7 @@ MEASURED: dict = {
     "quick_slab_amr_2026_12_05": {
         "n_elements_start": 1466, "h_band": 0.06, "slab_thickness": 0.015, "h_crack": 0.015,
         "amr_size_tolerance": 1.41, "peak_force": 0.561684, "peak_load": 0.09376, "n_elements_at_peak": 1965,
-        "ndof_u_at_peak_plus_alpha": 10208, "steps": 136, "newton_iterations": 785, "cutbacks": 5,
+        "dofs_at_peak": 10208, "steps": 136, "newton_iterations": 785, "cutbacks": 5,
         "n_elements_end": 5939, "wall_time_s": 654, "threads": 2,
         "twin_2d": {"peak_force": 0.561662, "peak_load": 0.093759, "n_elements_at_peak": 1965, "steps": 122,
                     "newton_iterations": 772, "cutbacks": 5, "n_elements_end": 5851, "wall_time_s": 155},
