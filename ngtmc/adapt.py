@@ -130,6 +130,12 @@ class Adaptivity:
         if int(self.max_rounds) != self.max_rounds or self.max_rounds < 1:
             raise ValueError(f"Adaptivity max_rounds = {self.max_rounds!r} must be an integer >= 1")
 
+    def smallest_size(self) -> float:
+        """The smallest longest edge a refined element may keep, mm: the smaller of ``h_crack`` and
+        ``h_void`` times ``size_tolerance``. A prism is never bisected along its height, so a
+        slab's prisms must be no taller (:func:`check_solver`)."""
+        return min(h for h in (self.h_crack, self.h_void) if h is not None) * self.size_tolerance
+
 
 @dataclass
 class RefinementRecord:
@@ -189,8 +195,7 @@ def check_solver(solver, remesh: bool = False, adapt: Adaptivity | None = None):
         nodes = element_vertices(mesh)
         xyz = _coordinates(mesh)
         height = float(np.max(np.linalg.norm(xyz[nodes[:, 3:]] - xyz[nodes[:, :3]], axis=2)))
-        sizes = [h for h in (adapt.h_crack, adapt.h_void) if h is not None]
-        smallest = min(sizes) * adapt.size_tolerance
+        smallest = adapt.smallest_size()
         if height > smallest * (1.0 + 1e-9):
             raise ValueError(f"the prisms are up to {height:.4g} mm tall, more than the smallest size they are to "
                              f"be refined to ({smallest:.4g} mm: h_crack or h_void times size_tolerance); NGSolve "

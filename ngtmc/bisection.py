@@ -43,6 +43,7 @@ import numpy as np
 import ngsolve as ngs
 
 from .adapt import RefinementRecord, _per_element
+from .scene import element_vertices
 
 __all__ = ["refine", "replay", "transfer_history"]
 
@@ -56,7 +57,6 @@ def _ancestors(mesh, ne_old: int, before=None) -> np.ndarray:
     element's centroid, which lies inside its ancestor."""
     ne = mesh.ne
     if before is not None:
-        from .scene import element_vertices
         c = np.asarray(mesh.ngmesh.Coordinates())[element_vertices(mesh)].mean(axis=1)
         anc = np.asarray(before(c[:, 0], c[:, 1], c[:, 2])["nr"], dtype=np.int64)
         if np.any(anc < 0) or np.any(anc >= ne_old) or np.any(anc[:ne_old] != np.arange(ne_old)):
@@ -89,8 +89,9 @@ def transfer_history(H_old: np.ndarray, ancestors: np.ndarray, ne_old: int, npts
 
 
 def _prisms(mesh) -> bool:
-    """Whether ``mesh`` is 3D with prisms (:func:`ngtmc.adapt.check_solver`: then only prisms)."""
-    return mesh.dim == 3 and any(el.type == ngs.ET.PRISM for el in mesh.Elements(ngs.VOL))
+    """Whether ``mesh`` is a mesh of prisms (:func:`ngtmc.scene.element_vertices` gives them six
+    vertices; :func:`ngtmc.adapt.check_solver` admits no other 3D mesh with prisms)."""
+    return mesh.dim == 3 and element_vertices(mesh).shape[1] == 6
 
 
 def _carrier_space(solver):

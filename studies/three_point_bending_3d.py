@@ -375,12 +375,11 @@ def check_parameters(p: dict):
     if p.get("sphere_symmetry", "quarter") not in ("half", "quarter"):
         raise StudyError(f"three_point_bending_3d: sphere_symmetry = {p.get('sphere_symmetry')!r} is not 'half' "
                          "or 'quarter'")
-    h_crack = float(p.get("h_crack", 0.0) or 0.0)
-    if h_crack > 0 and p.get("parts", "all") != "hemisphere":
+    adapt = simulation_options(p).get("adapt")
+    if adapt is not None and p.get("parts", "all") != "hemisphere":
         # refused before any case runs (the 2D twin would run first): NGSolve bisects the slab's
         # prisms across their triangles only (ngtmc.adapt.check_solver)
-        h_void = float(p.get("amr_h_void", 0.0) or 0.0)
-        smallest = min(h_crack, h_void if h_void > 0 else h_crack) * float(p.get("amr_size_tolerance", 1.0))
+        smallest = adapt.smallest_size()
         if float(p["slab_thickness"]) > smallest * (1.0 + 1e-9):
             raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm is more than the "
                              f"size the slab is refined to (h_crack or amr_h_void times amr_size_tolerance = "

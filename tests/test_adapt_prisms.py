@@ -7,23 +7,13 @@ the same way, element for element."""
 import numpy as np
 import ngsolve as ngs
 import pytest
-from netgen.occ import OCCGeometry, Rectangle
 
 import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
 from ngtmc.extrude import plane_strain_slab
-from scenes import (damaged, homogeneous_state_kept_in_3d, notched_plate, plain_prolongation_error,
+from scenes import (bar_mesh, damaged, homogeneous_state_kept_in_3d, notched_plate, plain_prolongation_error,
                     refine_and_check_the_transfer_in_3d)
-
-
-def _square(maxh=0.3):
-    face = Rectangle(1, 1).Face()
-    face.faces.name = "plate"
-    for e in face.edges:
-        c = e.center
-        e.name = "left" if c.x < 1e-9 else "right" if c.x > 1 - 1e-9 else "bottom" if c.y < 1e-9 else "top"
-    return ngs.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=maxh))
 
 
 def test_prisms_are_bisected_across_their_triangles_and_an_order_two_field_is_carried_exactly():
@@ -33,14 +23,14 @@ def test_prisms_are_bisected_across_their_triangles_and_an_order_two_field_is_ca
     faces and its prisms."""
     x, y, z = ngs.x, ngs.y, ngs.z
     field = ngs.CF((1e-3 * x * y, -2e-3 * y * y, 1e-3 * x * x * z))
-    slab = ngtmc.extrude(_square(), 0.1)
+    slab = ngtmc.extrude(bar_mesh(height=1.0, maxh=0.3), 0.1)
     with pytest.raises(Exception, match="only implemented for order==1"):
         ngs.VectorH1(slab, order=2, hoprolongation=True)
     plain = plain_prolongation_error(slab, field)
     assert plain > 1e-4 * 1e-3   # silently inexact
 
-    scene = ngtmc.Scene(ngtmc.extrude(_square(), 0.1), {"plate": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
-                        supports=[ngtmc.Support("left", x=True, y=True, z=True)], fracture_regions="plate",
+    scene = ngtmc.Scene(ngtmc.extrude(bar_mesh(height=1.0, maxh=0.3), 0.1), {"bar": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
+                        supports=[ngtmc.Support("left", x=True, y=True, z=True)], fracture_regions="bar",
                         load=ngtmc.DisplacementLoad("right", "x"), order=2)
     s = ngtmc.Solver(scene, compile=True)
     s.u.Set(field)
@@ -62,10 +52,10 @@ def test_history_and_alpha_never_decrease_across_refinement_of_prisms():
 
 @pytest.mark.parametrize("order", [1, 2])
 def test_homogeneous_state_is_reproduced_exactly_on_prisms(order):
-    scene = ngtmc.Scene(ngtmc.extrude(_square(), 0.1), {"plate": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
+    scene = ngtmc.Scene(ngtmc.extrude(bar_mesh(height=1.0, maxh=0.3), 0.1), {"bar": ngtmc.Material(1000.0, 0.3, 1e-3, 0.1)},
                         supports=[ngtmc.Support("left", x=True), ngtmc.Support("bottom", y=True),
                                   ngtmc.Support("front", z=True)],
-                        load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="plate", order=order)
+                        load=ngtmc.DisplacementLoad("right", "x"), fracture_regions="bar", order=order)
     homogeneous_state_kept_in_3d(ngtmc.Solver(scene, compile=True), order)
 
 
