@@ -49,10 +49,8 @@ applied: it bounds the dissipation per step, which the path now does itself):
    one converges in a few iterations: the crack advances element by element, each advance a small
    snap-back; at the paper's resolution the fixed-load Newton also stalled before the peak),
    unless the step had to be scaled below a quarter of dD (slow growth).
-6. Every step starts from the secant predictor x_n + r (x_n - x_{n-1}) through the last two
-   accepted states (alpha kept in [alpha_n, 1]; r the ratio of the load or dissipation
-   increments, at most 2; damped to r/2 or r/4 where the full secant would invert an element,
-   :data:`ngtmc.displacement_newton.SECANT_DAMPING`), or, without it, from the u solve with alpha_{n-1}.
+6. Every step starts from the secant predictor through the last two accepted states
+   (:mod:`ngtmc.path_predictor`), or, without it, from the u solve with alpha_{n-1}.
 
 dD = Gc_ref ``crack_advance`` (times the crack front's length ``crack_front`` in 3D) times the
 step control's scale, which halves on a failed step and doubles back after successes like the load
@@ -67,7 +65,7 @@ import math
 
 import numpy as np
 
-from .displacement_newton import secant_displacement
+from .path_predictor import SecantPredictor
 from .path_sizing import DissipationSizing
 
 __all__ = ["DissipationPath"]
@@ -142,10 +140,8 @@ class DissipationPath:
         #: True after a dissipation step: the next step is one too, until the load of a
         #: dissipation step moves more than the step control's increment
         self.dissipating = False
-        #: the last two accepted states (u, alpha) and loads (mm), for the secant predictor
-        self.x_n = (s.u.vec.FV().NumPy().copy(), s.alpha.vec.FV().NumPy().copy())
-        self.load_n = s.load
-        self.x_prev, self.load_prev = None, None
+        #: the last two accepted states and loads, and the secant predictor through them
+        self.predictor = SecantPredictor(sim)
         self.delta_d_prev = 0.0
         #: the growth factor of dD and its ceiling (:mod:`ngtmc.path_sizing`)
         self.sizing = DissipationSizing(s, self.l0_ref, growth_ceiling)
@@ -201,7 +197,8 @@ class DissipationPath:
             self.sizing.reset()
         self.segment = seg
         prescaled = None
-        if self.prescale and self.dissipating and self.delta_d_prev > 0 and self.load_prev is not None:
+        pr = self.predictor
+        if self.prescale and self.dissipating and self.delta_d_prev > 0 and pr.load_prev is not None:
             # rule 3 before the solve, after a dissipation step: the secant through the last two
             # states (linear in dD) moves the load past du_max, so the growth factor shrinks, in
             # proportion, at once instead of after a converged solve, and grows again from there.
@@ -209,7 +206,7 @@ class DissipationPath:
             # curve flattens at the peak. The growth factor must shrink with dD: scaling dD alone
             # let it run ahead of the steps taken, and the quick 2D three-point bending then took
             # one step of eight times the last dD at its peak
-            predicted = self.target / self.delta_d_prev * abs(self.load_n - self.load_prev)
+            predicted = self.target / self.delta_d_prev * abs(pr.load_n - pr.load_prev)
             if predicted > sim.control.du_max * (1 + 1e-9):
                 prescaled = BOUNDED_FRACTION * sim.control.du_max / predicted
                 self.sizing.shrink(prescaled)
@@ -239,7 +236,7 @@ class DissipationPath:
         # the cut-backs went on to du_min; the paper L-panel at 6.2078 mm)
         guess = du if self.rate <= 0 else min(sim.control.du_max, dD / self.rate)
         load_guess = load_n + direction * guess
-        load_sec = self._secant(dD / self.delta_d_prev) if self.delta_d_prev > 0 else None
+        load_sec = pr.set(dD / self.delta_d_prev) if self.delta_d_prev > 0 else None
         if load_sec is not None:
             load_guess = load_sec
         else:
@@ -332,32 +329,21 @@ class DissipationPath:
         info["t_new"] = self._time_of(self.coupled.load_solved, t0, t1)
         return True
 
-    def predictor_states(self) -> list[dict]:
-        """The accepted state before the last one, (u, alpha), for the secant predictor, as a
-        partial state that :func:`ngtmc.bisection.refine` transfers to a refined mesh ([] if none)."""
-        if self.x_prev is None:
-            return []
-        return [{"u": self.x_prev[0], "alpha": self.x_prev[1]}]
-
     def mesh_changed(self, before: dict, previous: list[dict] = ()):
         """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`, the coupled Newton
         having followed it): ``before`` is the state before the step (the last accepted one)
-        transferred to the refined mesh, ``previous`` the :meth:`predictor_states` transferred
-        with it. The secant predictor goes on through those two states (without ``previous`` it
+        transferred to the refined mesh, ``previous`` the predictor's
+        :meth:`~ngtmc.path_predictor.SecantPredictor.states` transferred with it. The secant predictor goes on through those two states (without ``previous`` it
         restarts from ``before``), and the dissipation of the last accepted state is taken again on
         the refined mesh (the same P1 field, so the same value to round-off). Where ``before``
         was settled below its load on the new mesh (:func:`ngtmc.carried_state.settle`), the run
         goes on from that load: the simulation's pseudo-time and the last load follow it."""
-        self.x_n = (np.array(before["u"], dtype=float), np.array(before["alpha"], dtype=float))
-        if previous and self.x_prev is not None:
-            self.x_prev = (np.array(previous[0]["u"], dtype=float), np.array(previous[0]["alpha"], dtype=float))
-        else:
-            self.x_prev, self.load_prev = None, None
+        self.predictor.mesh_changed(before, previous)
         self.d_prev = self.coupled.D.value(np.asarray(before["alpha_committed"], dtype=float))
         load = float(before["load"])
-        if load != self.load_n:   # settled below its load
+        if load != self.predictor.load_n:   # settled below its load
             self.sim.t = self._time_of(load, *self._segment())
-        self.load_n = load
+        self.predictor.load_n = load
 
     def resolve(self, load: float, t_new: float, at_load: bool = False):
         """Solve the step just converged on the old mesh again on the refined one (predictor-
@@ -397,8 +383,9 @@ class DissipationPath:
         :meth:`ngtmc.schemes.StepSchemes._coupled_or_fallback`)."""
         sim, s = self.sim, self.sim.solver
         saved = s.get_state() if fallback and sim.fallback == "single-pass" else None
-        dl = self.load_n - self.load_prev if self.x_prev is not None else 0.0
-        if not (dl != 0.0 and self._secant((load - self.load_n) / dl, load) is not None):
+        pr = self.predictor
+        dl = pr.last_load_increment()
+        if not (dl != 0.0 and pr.set((load - pr.load_n) / dl, load) is not None):
             res = s.solve_displacement(load)
             sim._add(info, res)
             if not res.converged:
@@ -408,30 +395,12 @@ class DissipationPath:
             return sim._coupled_or_fallback(load, info, saved)
         return sim._coupled_newton(load, info)
 
-    def _secant(self, ratio: float, load: float | None = None):
-        """Set u and alpha to the secant predictor x_n + ratio (x_n - x_{n-1}) (alpha kept in
-        [alpha_n, 1]), with the boundary values of ``load`` (default: the secant load
-        lambda_n + ratio (lambda_n - lambda_{n-1})). Returns the load, or None (state unchanged)
-        when there is no previous state, the ratio is outside (0, 2], or an element would invert."""
-        if self.x_prev is None:
-            return None
-        s = self.sim.solver
-        u_n, a_n = self.x_n
-        u_p, a_p = self.x_prev
-        if load is None:
-            load = self.load_n + ratio * (self.load_n - self.load_prev)
-        f = secant_displacement(s, u_n, u_p, ratio, load)
-        if f is None:
-            return None
-        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + f * (a_n - a_p), a_n, 1.0)
-        return load
-
     def accepted(self, step_size: float, iterations: int = 0, cutbacks: int = 0):
         """After an accepted step of |load change| ``step_size`` (mm), ``iterations`` Newton
         iterations and ``cutbacks`` cut-backs: update the rate dD/d(load), the growth factor of dD
         and the last two states of the secant predictor."""
         s = self.sim.solver
-        forward = (s.load - self.load_n) * self._direction() > 0
+        forward = (s.load - self.predictor.load_n) * self._direction() > 0
         tried = self._factor_tried if self._factor_tried is not None else self.factor
         first = self._factor_first if self._factor_first is not None else tried * 2.0 ** cutbacks
         self.sizing.accepted(self._last_kind, iterations, cutbacks, forward, tried, first)
@@ -442,9 +411,7 @@ class DissipationPath:
         delta = d - self.d_prev
         self.d_prev = d
         self.delta_d_prev = delta
-        self.x_prev, self.load_prev = self.x_n, self.load_n
-        self.x_n = (s.u.vec.FV().NumPy().copy(), s.alpha.vec.FV().NumPy().copy())
-        self.load_n = s.load
+        self.predictor.accepted()
         if step_size > 0:
             self.rate = max(delta, 0.0) / step_size
         else:
@@ -461,32 +428,17 @@ class DissipationPath:
         return {**self.sizing.get_state(), "scale_ref": self._scale_ref, "segment": self.segment,
                 "rate": self.rate, "d_prev": self.d_prev, "dissipation_steps": self.dissipation_steps,
                 "prescaled_steps": self.prescaled_steps, "rescaled_steps": self.rescaled_steps,
-                "dissipating": self.dissipating, "load_n": self.load_n, "load_prev": self.load_prev,
+                "dissipating": self.dissipating, **self.predictor.get_state(),
                 "delta_d_prev": self.delta_d_prev}
 
     def get_arrays(self) -> dict:
         """The last two accepted states of the secant predictor (numpy arrays by name)."""
-        out = {"path_u_n": self.x_n[0], "path_alpha_n": self.x_n[1]}
-        if self.x_prev is not None:
-            out.update(path_u_prev=self.x_prev[0], path_alpha_prev=self.x_prev[1])
-        return out
+        return self.predictor.get_arrays()
 
     def set_state(self, st: dict, arrays: dict | None = None):
         """Restore :meth:`get_state` (and :meth:`get_arrays`; without them the predictor starts
         from the solver's current state)."""
-        arrays = arrays or {}
-        s = self.sim.solver
-        if "path_u_n" in arrays:
-            self.x_n = (np.array(arrays["path_u_n"], dtype=float), np.array(arrays["path_alpha_n"], dtype=float))
-            self.load_n = float(st["load_n"])
-        else:
-            self.x_n = (s.u.vec.FV().NumPy().copy(), s.alpha.vec.FV().NumPy().copy())
-            self.load_n = s.load
-        if "path_u_prev" in arrays:
-            self.x_prev = (np.array(arrays["path_u_prev"], dtype=float), np.array(arrays["path_alpha_prev"], dtype=float))
-            self.load_prev = float(st["load_prev"])
-        else:
-            self.x_prev, self.load_prev = None, None
+        self.predictor.set_state(st, arrays)
         self.delta_d_prev = float(st.get("delta_d_prev", 0.0))
         self.rate = float(st["rate"])
         self.d_prev = float(st["d_prev"])

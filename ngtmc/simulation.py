@@ -306,7 +306,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
             marked = mark(s, self.adapt, info.get("H_trial"), remesher=rm)
             if not marked.any():
                 break
-            previous = self._path.predictor_states() if self._path is not None else []
+            previous = self._path.predictor.states() if self._path is not None else []
             if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
                 record, (saved, *previous) = remesh_step(self, marked, [saved, *previous])
                 s = self.solver

@@ -98,7 +98,7 @@ def _growth_stepper(**coupled):
     def step(iterations, cutbacks=0, converged_at=None, forward=True):
         path._last_kind = "dissipation"
         path._factor_tried = converged_at if converged_at is not None else path.factor
-        s.load = path.load_n + (1e-5 if forward else -1e-5)
+        s.load = path.predictor.load_n + (1e-5 if forward else -1e-5)
         path.accepted(1e-5, iterations=iterations, cutbacks=cutbacks)
         return path.sizing.growth
 
@@ -320,7 +320,7 @@ def test_the_step_controls_scale_halves_the_dissipation_step_only_within_a_step(
     sim.control_state, _ = sim.control.failed(sim.control_state, 1e-4)   # a failed attempt: half
     assert path.target == pytest.approx(base / 2)
     path._last_kind, path._factor_tried = "dissipation", path.factor
-    sim.solver.load = path.load_n + 1e-5
+    sim.solver.load = path.predictor.load_n + 1e-5
     path.accepted(1e-5, iterations=20, cutbacks=1)
     assert path.target == pytest.approx(base / 2)                       # the next step: where it converged
     sim.control_state = sim.control.initial_state()                      # the step control's scale recovers
@@ -344,8 +344,8 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
     sim.advance()
     sim.advance()
     path, s = sim._path, sim.solver
-    (u_n, a_n), (u_p, a_p) = path.x_n, path.x_prev
-    load = path.load_n + (path.load_n - path.load_prev)
+    (u_n, a_n), (u_p, a_p) = path.predictor.x_n, path.predictor.x_prev
+    load = path.predictor.load_n + (path.predictor.load_n - path.predictor.load_prev)
     real_min_J = s.min_J
     calls = []
 
@@ -354,7 +354,7 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
         return -1.0 if len(calls) == 1 else real_min_J()
 
     monkeypatch.setattr(s, "min_J", min_J_refusing_the_full_secant)
-    assert path._secant(1.0, load) == load
+    assert path.predictor.set(1.0, load) == load
     assert len(calls) == 2
     uN = s.u.vec.FV().NumPy()
     free = s._free_np
@@ -364,7 +364,7 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
 
     before = uN.copy()
     monkeypatch.setattr(s, "min_J", lambda: -1.0)
-    assert path._secant(1.0, load) is None
+    assert path.predictor.set(1.0, load) is None
     np.testing.assert_array_equal(s.u.vec.FV().NumPy(), before)
 
 
@@ -429,7 +429,7 @@ def test_a_displacement_step_that_the_coupled_newton_cannot_close_falls_back_to_
         sim.advance()
     path, s = sim._path, sim.solver
     saved = s.get_state()
-    load = path.load_n + 1e-3
+    load = path.predictor.load_n + 1e-3
 
     def fail(load, info, alpha_upper=None):
         info["message"] = "made to fail"
