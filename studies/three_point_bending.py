@@ -247,6 +247,21 @@ J = 0 between its points at no energy cost, and the J > 0 guard at the 6 history
 every Newton step. The elastic terms are now integrated at the history points
 (:meth:`ngtmc.Solver.energy_measure`); both failing states converge in 13 iterations without a
 shifted tangent, and the peak moved by -0.14 % (quick: 38.195 -> 38.142 N/mm).
+
+Adaptive refinement (``--set h_crack``; issue 12, docs/adaptivity.md)
+-----------------------------------------------------------------------
+From a beam with no fine band (``--set h_band=0.1 --set h_void=0.06 --set h_indenter=0.08``),
+refined by remeshing to l0/4 along the crack and to the paper's void size where J < 0.5
+(``--set h_crack=0.0075 --set amr_lookahead=0.06 --set amr_h_void=0.015 --set
+amr_remesh_maxh=0.15``, ``-r paper``), against the paper-resolution band run of the same code,
+side by side, one thread each (2026-12-04): peak 36.466 against 36.142 N/mm (**+0.90 %**, target
+2 %) with **28 % of its dofs** (14281 of 50812; target a third); to the peak 57 s against 138 s;
+the whole curve **1478 s against 961 s** (target: less), 264 steps and 1614 Newton iterations
+against 157 and 841; the band's crack within 0.41 h of the refined one on average and 1.19 h at
+most (h = 0.0075 mm). The whole-curve time goes to the refinements in the crack run: the state on
+the refined mesh has no equilibrium at its load and is settled below it, and neither keeping the
+elements outside the refined zone nor an exact (nested, shape-keeping red-green) transfer
+changes that (docs/adaptivity.md, "Why a refinement in the crack run needs a settle").
 """
 from __future__ import annotations
 
