@@ -20,7 +20,15 @@ Marked (and larger than their target size) are the elements
 * with ``buffer_length`` (a lookahead), when any of those is still to be refined, also every
   element whose centroid lies within that distance of theirs: a hysteresis, so that a running
   crack moves about that far before the next refinement (without it, a crack that moves by a
-  fraction of an element per step triggers a refinement, and a re-solve, at almost every step).
+  fraction of an element per step triggers a refinement, and a re-solve, at almost every step);
+* with ``corridor`` (a half width), at the first refinement after the crack starts to run (the
+  force below ``CORRIDOR_DROP`` of its peak, decided by the simulation), also every element of
+  the fracture regions within ``corridor`` of the ray from the damaged zone through the crack's
+  front (:func:`corridor`): the path ahead refined at once. Every refinement next to a
+  running crack moves its discrete equilibrium (the refined mesh resolves AT-2's damage profile
+  differently), so that the state is settled below its load (:mod:`ngtmc.carried_state`) and the
+  path climbs back: on the three-point bending the crack run then takes one such refinement
+  instead of one per lookahead (docs/adaptivity.md, "A corridor along the crack's path").
 
 Path following: a refined step is solved again as the same kind of step, a dissipation step of
 the same dD (its load may land elsewhere) or a displacement step to the same load, from the
@@ -51,7 +59,7 @@ import ngsolve as ngs
 from .materials import check_number
 from .scene import element_vertices
 
-__all__ = ["Adaptivity", "mark", "targets", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
+__all__ = ["Adaptivity", "mark", "corridor", "CORRIDOR_DROP", "targets", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
 
 
 @dataclass(frozen=True)
@@ -65,7 +73,8 @@ class Adaptivity:
     mm (None: no refinement of the void). J_threshold: J below which a void element is refined
     (in (0, 1)). buffer: layers of neighbours refined with a marked element (>= 0). buffer_length:
     elements whose centroid is within this distance (mm, >= 0) of a marked element's are refined
-    too (0: none; a lookahead ahead of the crack tip). max_rounds:
+    too (0: none; a lookahead ahead of the crack tip). corridor: half width, mm (>= 0; 0: none),
+    of the corridor refined ahead of a running crack (module docstring, :func:`corridor`). max_rounds:
     refinement rounds (each followed by a re-solve) after one step at most (>= 1).
     size_tolerance: an element is refined while its longest edge exceeds size_tolerance times its
     target (>= 1). NGSolve's refinement halves an element's size (its first level of a Netgen
@@ -93,6 +102,7 @@ class Adaptivity:
     buffer: int = 1
     max_rounds: int = 10
     buffer_length: float = 0.0
+    corridor: float = 0.0
     size_tolerance: float = 1.0
     remesh_maxh: float | None = None
     history_transfer: str = "max"
@@ -116,6 +126,9 @@ class Adaptivity:
         check_number("Adaptivity buffer_length", self.buffer_length, "mm")
         if not (math.isfinite(self.buffer_length) and self.buffer_length >= 0):
             raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r} mm must be finite and >= 0")
+        check_number("Adaptivity corridor", self.corridor, "mm")
+        if not (math.isfinite(self.corridor) and self.corridor >= 0):
+            raise ValueError(f"Adaptivity corridor = {self.corridor!r} mm must be finite and >= 0")
         check_number("Adaptivity size_tolerance", self.size_tolerance, "-")
         if not (math.isfinite(self.size_tolerance) and self.size_tolerance >= 1.0):
             raise ValueError(f"Adaptivity size_tolerance = {self.size_tolerance!r} must be finite and >= 1")
@@ -290,6 +303,51 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, remesher=None) 
         # buffer_length refined too; the crack then runs about that far before the next refinement
         flags = _within(mesh, flags, adapt.buffer_length)
     return flags & coarse
+
+
+#: the crack runs (:func:`corridor`) once the force has fallen below this fraction of its peak
+CORRIDOR_DROP = 0.95
+
+
+def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None) -> np.ndarray:
+    """Elements to refine besides ``marked`` (:func:`mark`) where the crack runs: those of the
+    fracture regions, still coarser than their target, whose centroid lies within
+    ``adapt.corridor`` (mm) of the ray from the centroid of the damaged elements (alpha > 1/2 at
+    a history point) through the centroid of the crack's front (the marked elements of the
+    fracture regions), from ``adapt.corridor`` behind the front on (boolean over the elements).
+    None where nothing is damaged or no fracture element is marked. The caller decides when the
+    crack runs (:data:`CORRIDOR_DROP`).
+
+    Why: every refinement next to a running crack puts its state past the refined mesh's
+    equilibrium at its load, even when the state is carried exactly (docs/adaptivity.md); a
+    straight corridor refined once takes those refinements out of the crack run where the path
+    keeps its direction. Where it turns, the indicator goes on refining as without it."""
+    out = np.zeros(solver.mesh.ne, dtype=bool)
+    w = float(adapt.corridor)
+    if not w > 0 or solver.alpha is None:
+        return out
+    frac, _ = _element_regions(solver)
+    front = marked & frac
+    scratch = solver._scratch_irs
+    scratch.Interpolate(solver.alpha)
+    damaged = (_per_element(scratch.vec.FV().NumPy(), solver.mesh.ne) > 0.5).any(axis=1) & frac
+    if not front.any() or not damaged.any():
+        return out
+    c = _centroids(solver.mesh)
+    tip = c[front].mean(axis=0)
+    d = tip - c[damaged].mean(axis=0)
+    n = float(np.linalg.norm(d))
+    if not n > 0:
+        return out
+    d /= n
+    rel = c - tip
+    along = rel @ d
+    across = np.linalg.norm(rel - along[:, None] * d, axis=1)
+    target = targets(solver, adapt)
+    coarse = solver.h > target * adapt.size_tolerance * (1.0 + 1e-9)
+    if remesher is not None:
+        coarse &= ~remesher.covered(solver.mesh, target)
+    return frac & coarse & (along >= -w) & (across <= w) & ~marked
 
 
 def _within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:

@@ -49,6 +49,10 @@ SOLVER_PARAMETERS = {
     "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
                                  "too (Adaptivity.buffer_length), so that a running crack tip stays on the fine mesh "
                                  "for several steps"),
+    "amr_corridor": (0.0, "mm", "with h_crack: half width of a corridor refined along the crack's path ahead of "
+                                "its front at the first refinement after the crack starts to run (the force below 0.95 of its peak; "
+                                "Adaptivity.corridor), so that the crack runs with one refinement instead of one "
+                                "per lookahead; 0: none"),
     "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
                               "Adaptivity.h_void); 0: the void is not refined"),
     "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
@@ -71,7 +75,7 @@ _COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 #: values then: they are left out of the parameter hashes and of the comparison of a resumed run
 #: with its record (:func:`effective_parameters`), so that runs recorded before they existed still
 #: resume and compare.
-INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
+INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_corridor": 0.0, "amr_h_void": 0.0, "amr_size_tolerance": 1.0,
                             "amr_remesh_maxh": 0.0, "amr_history_fraction": 1.0, "amr_buffer": 1}
 
 
@@ -79,7 +83,7 @@ INERT_WITHOUT_REFINEMENT = {"h_crack": 0.0, "amr_lookahead": 0.0, "amr_h_void": 
 #: hashes and comparisons at that value, so that the runs still resume and compare. A study adds
 #: its own by naming them in a tuple ``ADDED_AT_DEFAULT`` of its module; their value is then
 #: the default of its PARAMETERS (:func:`added_at_default`).
-ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0,
+ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_remesh_maxh": 0.0, "amr_corridor": 0.0,
                     "amr_history_fraction": 1.0, "amr_buffer": 1}
 
 
@@ -143,6 +147,7 @@ def simulation_options(p: dict) -> dict:
             h_void = float(p.get("amr_h_void", 0.0))
             maxh = float(p.get("amr_remesh_maxh", 0.0))
             out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
+                                      corridor=float(p.get("amr_corridor", 0.0)),
                                       h_void=h_void if h_void > 0 else None,
                                       size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
                                       history_fraction=float(p.get("amr_history_fraction", 1.0)),

@@ -61,3 +61,84 @@ def test_size_tolerance_refines_while_the_longest_edge_exceeds_it_times_the_targ
     assert indicated.any() and s.h[indicated].max() <= 0.03 * 2 ** 0.5 * (1 + 1e-9)
     with pytest.raises(ValueError, match="size_tolerance"):
         Adaptivity(h_crack=0.01, size_tolerance=0.9)
+
+
+def _plate_cracked_to(x_tip):
+    """The coarse notched plate (slit from the left edge to (0.3, 0.5), fracture everywhere) with a
+    damage field of a straight crack from the slit's end to (x_tip, 0.5): alpha = exp(-d / l0),
+    d the distance to that segment (l0 = 0.1 mm)."""
+    import ngsolve as ngs
+    s = _damaged_notched_plate()
+    xs = ngs.IfPos(ngs.x - x_tip, x_tip, ngs.IfPos(ngs.x - 0.3, ngs.x, 0.3))
+    d = ngs.sqrt((ngs.x - xs) ** 2 + (ngs.y - 0.5) ** 2)
+    s.alpha.Set(ngs.exp(-d / 0.1))
+    return s
+
+
+def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
+    """Adaptivity.corridor: with the front (the marked fracture elements) at the tip of a straight
+    crack along y = 0.5, the corridor holds the coarse elements ahead of the front within the
+    half width of the crack's line, up to the plate's right edge, and none behind the front or
+    off the line; none without damage or without a marked fracture element."""
+    from ngtmc.adapt import corridor
+    w = 0.12
+    s = _plate_cracked_to(0.5)
+    c = _centroids(s.mesh)
+    front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.5) < 0.06)
+    assert front.any()
+    a = Adaptivity(h_crack=0.03, corridor=w)
+    extra = corridor(s, a, front)
+    assert extra.any() and not (extra & front).any()
+    tip = c[front].mean(axis=0)
+    # ahead of the front and near the crack's line (the ray's direction is within a few degrees of
+    # +x: the damage's and the front's centroids both lie near y = 0.5)
+    assert np.all(c[extra, 0] >= tip[0] - w)
+    assert np.all(np.abs(c[extra, 1] - 0.5) <= w + 0.05)
+    # every coarse element on the path ahead, to the right edge, is in it
+    coarse = s.h > 0.03 * (1 + 1e-9)
+    on_path = coarse & ~front & (c[:, 0] > tip[0] + w) & (np.abs(c[:, 1] - tip[1]) < 0.5 * w)
+    assert on_path.any() and np.all(extra[on_path])
+    assert c[extra, 0].max() > 0.85
+    # nothing without a front, without damage, or with no width
+    assert not corridor(s, a, np.zeros_like(front)).any()
+    assert not corridor(s, Adaptivity(h_crack=0.03), front).any()
+    s.alpha.vec.FV().NumPy()[:] = 0.0
+    assert not corridor(s, a, front).any()
+
+
+def test_corridor_must_be_a_length():
+    with pytest.raises(ValueError, match="corridor"):
+        Adaptivity(h_crack=0.01, corridor=-0.1)
+
+
+def test_corridor_waits_for_the_crack_to_run_and_comes_once():
+    """The simulation adds the corridor at the first refinement after the last accepted force
+    fell below CORRIDOR_DROP of the largest so far, and at no later one (decided from the history
+    and the refinements alone, so a resumed run decides as the uninterrupted one); the study
+    setting amr_corridor reaches Adaptivity.corridor."""
+    import ngtmc
+    from ngtmc.study import simulation_options
+    from scenes import notched_plate
+    sim = ngtmc.Simulation(notched_plate(maxh=0.2, h_band=0.2, l0=0.1), ngtmc.Schedule([0.0, 0.007]),
+                           ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7), compile=False,
+                           adapt=Adaptivity(h_crack=0.025, corridor=0.1))
+    assert not sim._corridor_due()
+    peak = 600.0
+    for forces, due in (([0.0, 400.0, peak], False), ([0.0, peak, 0.96 * peak], False),
+                        ([0.0, peak, 0.94 * peak], True), ([0.0, peak, 0.5 * peak, 0.99 * peak], False)):
+        sim.rows = [{"step": i, "force": f} for i, f in enumerate(forces)]
+        assert sim._corridor_due() is due, forces
+    # round-off about zero before contact (a fall of 1e-13 N/mm) does not count as the drop
+    sim.rows = [{"step": i, "force": f} for i, f in enumerate([-0.0, 1e-12, 5e-13, peak, 0.9 * peak, 0.8 * peak])]
+    sim.refinements = [(3, None)]           # before the drop (step 4): still due
+    assert sim._corridor_due()
+    sim.refinements = [(3, None), (5, None)]   # one after it: done
+    assert not sim._corridor_due()
+    sim.rows = [{"step": i, "force": f} for i, f in enumerate([0.0, peak, 0.9 * peak, 0.8 * peak])]
+    sim.refinements = [(1, None)]           # before the drop (step 2): still due
+    assert sim._corridor_due()
+    sim.refinements = [(1, None), (3, None)]   # one after it: done
+    assert not sim._corridor_due()
+    assert adapt.CORRIDOR_DROP == 0.95
+    assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0.1})["adapt"].corridor == 0.1
+    assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == 0.0
