@@ -22,7 +22,7 @@ Marked (and larger than their target size) are the elements
   crack moves about that far before the next refinement (without it, a crack that moves by a
   fraction of an element per step triggers a refinement, and a re-solve, at almost every step);
 * with ``corridor`` (a half width), at the first refinement after the crack starts to run (the
-  force below ``CORRIDOR_DROP`` of its peak, decided by the simulation), also every element of
+  force below ``CORRIDOR_DROP`` of its peak: :func:`corridor_due`), also every element of
   the fracture regions within ``corridor`` of the ray from the damaged zone through the crack's
   front (:func:`corridor`): the path ahead refined at once. Every refinement next to a
   running crack moves its discrete equilibrium (the refined mesh resolves AT-2's damage profile
@@ -60,7 +60,8 @@ import ngsolve as ngs
 from .materials import check_number
 from .scene import element_vertices
 
-__all__ = ["Adaptivity", "mark", "corridor", "CORRIDOR_DROP", "targets", "refine", "replay", "RefinementRecord", "private_scene", "transfer_history"]
+__all__ = ["Adaptivity", "mark", "corridor", "corridor_due", "CORRIDOR_DROP", "targets", "refine", "replay", "RefinementRecord",
+           "private_scene", "transfer_history"]
 
 
 @dataclass(frozen=True)
@@ -310,14 +311,30 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, remesher=None) 
 CORRIDOR_DROP = 0.95
 
 
+def corridor_due(rows: list[dict], refinements: list[tuple]) -> bool:
+    """Whether a refinement now adds the :func:`corridor`: the crack runs (the last force of the
+    history ``rows``, N or N/mm, below :data:`CORRIDOR_DROP` of the largest) and none of the
+    ``refinements`` ((step, record), :attr:`ngtmc.simulation.Simulation.refinements`) came after
+    the first row below it after that peak. Not the first row below a running maximum: the
+    force's round-off about zero before contact falls below it. The history alone decides, so a
+    resumed run decides as the uninterrupted one."""
+    f = np.array([float(r["force"]) for r in rows])
+    if not f.size or not f.max() > 0 or not f[-1] < CORRIDOR_DROP * f.max():
+        return False
+    peak = int(np.argmax(f))
+    first = peak + int(np.argmax(f[peak:] < CORRIDOR_DROP * f[peak]))
+    step = int(rows[first].get("step", first))
+    return not any(s > step for s, _ in refinements)
+
+
 def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None) -> np.ndarray:
     """Elements to refine besides ``marked`` (:func:`mark`) where the crack runs: those of the
     fracture regions, still coarser than their target, whose centroid lies within
     ``adapt.corridor`` (mm) of the ray from the centroid of the damaged elements (alpha > 1/2 at
     a history point) through the centroid of the crack's front (the marked elements of the
     fracture regions), from ``adapt.corridor`` behind the front on (boolean over the elements).
-    None where nothing is damaged or no fracture element is marked. The caller decides when the
-    crack runs (:data:`CORRIDOR_DROP`).
+    None where nothing is damaged or no fracture element is marked. The caller decides when
+    (:func:`corridor_due`).
 
     Why: every refinement next to a running crack puts its state past the refined mesh's
     equilibrium at its load, even when the state is carried exactly (docs/adaptivity.md); a

@@ -297,14 +297,14 @@ class Simulation(RunRecords, RunState, StepSchemes):
         predictor; repeat until nothing is marked (at most ``max_rounds`` times). Returns (ok,
         info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
         cuts the step back as for any failed step."""
-        from .adapt import corridor, mark
+        from .adapt import corridor, corridor_due, mark
         from .bisection import refine
         from .remesh import remesh_step
         rm = self._remesher
         for _ in range(self.adapt.max_rounds):
             s = self.solver
             marked = mark(s, self.adapt, info.get("H_trial"), remesher=rm)
-            if self.adapt.corridor > 0 and marked.any() and self._corridor_due():
+            if self.adapt.corridor > 0 and marked.any() and corridor_due(self.rows, self.refinements):
                 marked |= corridor(s, self.adapt, marked, remesher=rm)
             if not marked.any():
                 break
@@ -333,21 +333,6 @@ class Simulation(RunRecords, RunState, StepSchemes):
                 info["message"] = f"re-solve on the refined mesh failed ({info.get('message', '')})"
                 return False, info, saved
         return True, info, saved
-
-    def _corridor_due(self) -> bool:
-        """Whether this refinement adds the corridor (:func:`ngtmc.adapt.corridor`): the crack runs
-        (the last accepted force below :data:`ngtmc.adapt.CORRIDOR_DROP` of the largest so far) and
-        no refinement followed the first step below it after that peak (not the first below a
-        running maximum: the force's round-off about zero before contact falls below it). The history alone decides, so a resumed
-        run decides as the uninterrupted one."""
-        from .adapt import CORRIDOR_DROP
-        f = np.array([float(r["force"]) for r in self.rows])
-        if not f.size or not f.max() > 0 or not f[-1] < CORRIDOR_DROP * f.max():
-            return False
-        peak = int(np.argmax(f))
-        first = peak + int(np.argmax(f[peak:] < CORRIDOR_DROP * f[peak]))   # the first row below, after the peak
-        step = int(self.rows[first].get("step", first))
-        return not any(s > step for s, _ in self.refinements)
 
     def _force_control_peak(self) -> str:
         """Under force control (only Traction loads), a message when the last accepted steps show a

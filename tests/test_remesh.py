@@ -271,4 +271,3 @@ def test_run_folder_of_a_remeshed_run_keeps_each_snapshot_on_its_mesh(tmp_path):
     last = vtus[-1].read_text()
     n_points = int(re.search(r'NumberOfPoints="(\d+)"', last).group(1))
     assert n_points == res.solver.mesh.nv
-
