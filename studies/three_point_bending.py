@@ -263,7 +263,7 @@ the refined mesh has no equilibrium at its load and is settled below it, and nei
 elements outside the refined zone nor an exact (nested, shape-keeping red-green) transfer
 changes that (docs/adaptivity.md, "Why a refinement in the crack run needs a settle").
 ``--set amr_corridor=0.1`` refines a corridor along the crack's path once the crack runs: at quick
-(from ``h_band=0.06`` to ``h_crack=0.015``, remeshed) the whole curve in 124 s against 400 s
+(from ``h_band=0.06`` to ``h_crack=0.015``, remeshed) the whole curve in 124-149 s against 400 s
 without it (one refinement in the crack run instead of 18; the quick band 97 s); at the paper's
 resolution ahead of the band run to 30 N/mm after the peak (322 s against 351 s) and behind from
 25 N/mm on (docs/adaptivity.md, "A corridor along the crack's path").
