@@ -28,8 +28,9 @@ Marked (and larger than their target size) are the elements
   running crack moves its discrete equilibrium (the refined mesh resolves AT-2's damage profile
   differently), so that the state is settled below its load (:mod:`ngtmc.carried_state`) and the
   path climbs back: the quick three-point bending's remeshed crack run then takes one such
-  refinement instead of 18 (124-149 s against 400 s; at the paper's resolution the damaged zone
-  outgrew the corridor: docs/adaptivity.md, "A corridor along the crack's path").
+  refinement instead of 18 (124-149 s against 400 s; at the paper's resolution the run is ahead of
+  the band run down to 16 N/mm and behind in the tail: docs/adaptivity.md, "A corridor along the
+  crack's path").
 
 Path following: a refined step is solved again as the same kind of step, a dissipation step of
 the same dD (its load may land elsewhere) or a displacement step to the same load, from the

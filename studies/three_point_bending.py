@@ -265,8 +265,9 @@ changes that (docs/adaptivity.md, "Why a refinement in the crack run needs a set
 ``--set amr_corridor=0.1`` refines a corridor along the crack's path once the crack runs: at quick
 (from ``h_band=0.06`` to ``h_crack=0.015``, remeshed) the whole curve in 124-149 s against 400 s
 without it (one refinement in the crack run instead of 18; the quick band 97 s); at the paper's
-resolution ahead of the band run to 30 N/mm after the peak (322 s against 351 s) and behind from
-25 N/mm on (docs/adaptivity.md, "A corridor along the crack's path").
+resolution, with ``amr_corridor=0.15``, ahead of the band run down to 16 N/mm after the peak (514 s
+against 550 s) and behind in the tail (10 N/mm at 871 s against 693 s; docs/adaptivity.md, "A
+corridor along the crack's path").
 """
 from __future__ import annotations
 
