@@ -298,14 +298,22 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, remesher=None) 
         if not flags.any():
             break
         flags = _neighbours(mesh, flags)
-    coarse = solver.h > target * adapt.size_tolerance * (1.0 + 1e-9)
-    if remesher is not None:
-        coarse &= ~remesher.covered(mesh, target)
+    coarse = _coarse(solver, adapt, target, remesher)
     if adapt.buffer_length > 0 and (flags & coarse).any():
         # hysteresis: only when the indicator reaches an element still to refine is the zone within
         # buffer_length refined too; the crack then runs about that far before the next refinement
         flags = _within(mesh, flags, adapt.buffer_length)
     return flags & coarse
+
+
+def _coarse(solver, adapt: Adaptivity, target: np.ndarray, remesher=None) -> np.ndarray:
+    """Elements still to refine (boolean): longest edge above ``target`` (mm, per element) times
+    ``size_tolerance``, and, in a remeshed run, not yet covered by the remesher's restrictions
+    (:meth:`ngtmc.remesh.Remesher.covered`)."""
+    coarse = solver.h > target * adapt.size_tolerance * (1.0 + 1e-9)
+    if remesher is not None:
+        coarse &= ~remesher.covered(solver.mesh, target)
+    return coarse
 
 
 #: the crack runs (:func:`corridor`) once the force has fallen below this fraction of its peak
@@ -362,10 +370,7 @@ def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None) -> np
     rel = c - tip
     along = rel @ d
     across = np.linalg.norm(rel - along[:, None] * d, axis=1)
-    target = targets(solver, adapt)
-    coarse = solver.h > target * adapt.size_tolerance * (1.0 + 1e-9)
-    if remesher is not None:
-        coarse &= ~remesher.covered(solver.mesh, target)
+    coarse = _coarse(solver, adapt, targets(solver, adapt), remesher)
     return frac & coarse & (along >= -w) & (across <= w) & ~marked
 
 
