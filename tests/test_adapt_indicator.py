@@ -106,6 +106,31 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     assert not corridor(s, a, front).any()
 
 
+def test_corridor_runs_across_the_fronts_opening_not_along_an_off_line_ray():
+    """The corridor's direction is the ray from the damaged zone to the front without its component
+    along the front's largest principal strain: with the front's centroid 0.1 mm off a straight
+    crack along y = 0.5 (the ray leans about 30 degrees) and the plate stretched in y (1 %), the
+    corridor runs along x through the front, as the crack does; unstretched, it follows the ray."""
+    import ngsolve as ngs
+    from ngtmc.adapt import corridor
+    w = 0.08
+    s = _plate_cracked_to(0.5)
+    c = _centroids(s.mesh)
+    front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.6) < 0.06)
+    tip = c[front].mean(axis=0)
+    a = Adaptivity(h_crack=0.03, corridor=w)
+    s.u.vec[:] = 0.0
+    leaning = corridor(s, a, front)            # u = 0: no opening, the ray as it is
+    assert c[leaning, 1].max() > tip[1] + w + 0.1
+    s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))
+    along = corridor(s, a, front)
+    assert along.any() and c[along, 0].max() > 0.85
+    assert np.all(np.abs(c[along, 1] - tip[1]) <= w)
+    coarse = s.h > 0.03 * (1 + 1e-9)
+    on_line = coarse & ~front & (c[:, 0] > tip[0] + w) & (np.abs(c[:, 1] - tip[1]) < 0.5 * w)
+    assert on_line.any() and np.all(along[on_line])
+
+
 def test_corridor_must_be_a_length():
     with pytest.raises(ValueError, match="corridor"):
         Adaptivity(h_crack=0.01, corridor=-0.1)
