@@ -244,7 +244,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
         # under dissipation control the dissipation per step is bounded by the path, not by Eq. 20
         du = ctrl.proposal(0.0 if self._path is not None else self.last_delta_wf, self.control_state)
         saved = s.get_state()
-        cutbacks = 0
+        cutbacks = resolve_failures = 0
         totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
         while True:
             if self.t + du >= t_turn - 1e-12 * max(1.0, t_turn) or t_turn - (self.t + du) < 1e-3 * ctrl.du_min:
@@ -257,6 +257,7 @@ class Simulation(RunRecords, RunState, StepSchemes):
             if ok and self.adapt is not None:
                 ok, info, saved = self._refine_and_resolve(t_new, info, saved, totals)
                 s = self.solver   # a remeshed run has a new solver
+                resolve_failures += not ok
             if ok:
                 t_new = info.get("t_new", t_new)  # path following solves for the load
                 break
@@ -286,7 +287,10 @@ class Simulation(RunRecords, RunState, StepSchemes):
         self.last_delta_wf = wf - self._wf_prev
         self._wf_prev = wf
         if self._path is not None:
-            self._path.accepted(step_size, totals["newton_iterations"], cutbacks)
+            # a failed re-solve on a refined mesh is the mesh's doing, not the step size's: it cuts
+            # the step back, but sets no ceiling on dD (docs/adaptivity.md, "A refinement's failed
+            # re-solve sets no ceiling on dD")
+            self._path.accepted(step_size, totals["newton_iterations"], cutbacks - resolve_failures)
         self._report_progress(row)
         return row
 

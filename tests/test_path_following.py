@@ -506,3 +506,47 @@ def test_stop_after_drop_ends_the_run_once_the_force_has_fallen():
         ngtmc.Simulation(sc, 0.012, stop_after_drop="half")
     with pytest.raises(ValueError, match="monotonic schedule.*turns at 0.01 mm"):
         ngtmc.Simulation(sc, ngtmc.Schedule([0.0, 0.01, 0.0]), stop_after_drop=0.5)
+
+
+def test_a_failed_re_solve_on_a_refined_mesh_cuts_back_but_sets_no_ceiling(monkeypatch):
+    """A step whose re-solve on a refined mesh failed (Simulation._refine_and_resolve) is cut back,
+    and the history counts the cut-back, but the path's sizing hears of none (no ceiling on dD:
+    the failure is the mesh's doing); a failure of the step's own solve is heard as before."""
+    from ngtmc.adapt import Adaptivity
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following", adapt=Adaptivity(h_crack=0.05))
+    heard = []
+    accepted = sim._path.accepted
+
+    def hear(step_size, iterations=0, cutbacks=0):
+        heard.append(cutbacks)
+        return accepted(step_size, iterations, cutbacks)
+
+    monkeypatch.setattr(sim._path, "accepted", hear)
+    fail_resolve, fail_attempt = [True], []
+
+    def refine_and_resolve(t_new, info, saved, totals):
+        if fail_resolve:
+            fail_resolve.pop()
+            info["message"] = "re-solve on the refined mesh failed (made to fail)"
+            return False, info, saved
+        return True, info, saved
+
+    attempt = sim._attempt
+
+    def own_attempt(t_new):
+        ok, info = attempt(t_new)
+        if fail_attempt:
+            fail_attempt.pop()
+            return False, info
+        return ok, info
+
+    monkeypatch.setattr(sim, "_refine_and_resolve", refine_and_resolve)
+    monkeypatch.setattr(sim, "_attempt", own_attempt)
+    row = sim.advance()
+    assert row["cutbacks"] == 1 and heard == [0]
+    fail_attempt.append(True)
+    row = sim.advance()
+    assert row["cutbacks"] == 1 and heard == [0, 1]
+    row = sim.advance()
+    assert row["cutbacks"] == 0 and heard == [0, 1, 0]
