@@ -136,7 +136,6 @@ def refine(solver, marked: np.ndarray, states=()) -> tuple[RefinementRecord, lis
         return g
 
     u_carriers = [carry_u(solver.u.vec.FV().NumPy())] + [carry_u(st["u"]) for st in states]
-    del tmp_u
     a_carriers = {}
     if solver.alpha is not None:
         def carry_a(values):

@@ -18,8 +18,6 @@ remeshing"). Units: mm, N; D per mm of thickness in 2D.
 """
 from __future__ import annotations
 
-import numpy as np
-
 __all__ = ["balance", "equilibrate", "consistent", "settle", "SETTLE_LOADS"]
 
 
