@@ -25,10 +25,10 @@ Marked (and larger than their target size) are the elements
   force below ``CORRIDOR_DROP`` of its peak: :func:`corridor_due`), also every element of
   the fracture regions within ``corridor`` of the line from the crack's front in the direction
   it runs (the ray from the damaged zone through the front, without its component along the
-  front's largest principal strain; :func:`corridor`): the path ahead refined at once. Every refinement next to a
-  running crack moves its discrete equilibrium (the refined mesh resolves AT-2's damage profile
-  differently), so that the state is settled below its load (:mod:`ngtmc.carried_state`) and the
-  path climbs back: the quick three-point bending's remeshed crack run then takes one such
+  front's largest principal strain; :func:`corridor`): the path ahead refined at once. Every
+  refinement next to a running crack moves its discrete equilibrium (the refined mesh resolves
+  AT-2's damage profile differently), so that the state is settled below its load
+  (:mod:`ngtmc.carried_state`) and the path climbs back: the quick three-point bending's remeshed crack run then takes one such
   refinement instead of 18 (124-149 s against 400 s); at the paper's resolution, none after the
   corridor, and the whole curve level with the band run's (docs/adaptivity.md, "A corridor along
   the crack's path" and the sections after it).
@@ -378,14 +378,16 @@ def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None) -> np
 def _crack_direction(solver, front: np.ndarray, ray: np.ndarray) -> np.ndarray | None:
     """Unit direction in which the crack runs: ``ray`` (from the damaged zone to the front, mm)
     without its component along the largest principal direction of the Green-Lagrange strain
-    averaged over the ``front`` elements, weighted by their areas (a crack opens across its largest principal stretch; in
-    3D the direction lies in the crack's plane); the ray itself where the front does not open (no
-    positive principal strain) or opens alike in every direction. None where no length is left.
+    averaged over the ``front`` elements, weighted by their areas (a crack opens across its
+    largest principal stretch; in 3D the direction lies in the crack's plane); the ray itself
+    where the front does not open (no positive principal strain) or opens alike in every
+    direction. None where no length is left.
 
     Why not the ray itself: the front's centroid lies where the mesh is still coarse, off the
-    crack's line. In the paper-resolution three-point bending the ray leaned 7 degrees off the
-    vertical crack; the corridor then left the crack's one side coarse near the beam's top, where
-    three more refinements, each settled, followed (docs/adaptivity.md)."""
+    crack's line. In the paper-resolution three-point bending the ray leaned 8.0 degrees off the
+    vertical crack (this direction: 1.2 degrees); the corridor then left the crack's one side
+    coarse near the beam's top, where four more refinements, each settled, followed
+    (docs/adaptivity.md, "The corridor's direction")."""
     mesh, dim = solver.mesh, solver.mesh.dim
     F = deformation_gradient(solver.u)
     E = 0.5 * (F.trans * F - ngs.Id(dim))
