@@ -301,7 +301,8 @@ class Simulation(RunRecords, RunState, StepSchemes):
         predictor; repeat until nothing is marked (at most ``max_rounds`` times). Returns (ok,
         info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
         cuts the step back as for any failed step."""
-        from .adapt import corridor, corridor_due, mark
+        from .adapt import mark
+        from .adapt_corridor import corridor, corridor_due
         from .bisection import refine
         from .remesh import remesh_step
         rm = self._remesher

@@ -5,7 +5,7 @@ when it marks none, nothing is marked."""
 import numpy as np
 import pytest
 
-from ngtmc import adapt
+from ngtmc import adapt, adapt_corridor
 from ngtmc.adapt import Adaptivity
 from test_adapt import _damaged_notched_plate
 
@@ -80,7 +80,7 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     crack along y = 0.5, the corridor holds the coarse elements ahead of the front within the
     half width of the crack's line, up to the plate's right edge, and none behind the front or
     off the line; none without damage or without a marked fracture element."""
-    from ngtmc.adapt import corridor
+    from ngtmc.adapt_corridor import corridor
     w = 0.12
     s = _plate_cracked_to(0.5)
     c = _centroids(s.mesh)
@@ -112,7 +112,7 @@ def test_corridor_runs_across_the_fronts_opening_not_along_an_off_line_ray():
     crack along y = 0.5 (the ray leans about 30 degrees) and the plate stretched in y (1 %), the
     corridor runs along x through the front, as the crack does; unstretched, it follows the ray."""
     import ngsolve as ngs
-    from ngtmc.adapt import corridor
+    from ngtmc.adapt_corridor import corridor
     w = 0.08
     s = _plate_cracked_to(0.5)
     c = _centroids(s.mesh)
@@ -147,23 +147,23 @@ def test_corridor_waits_for_the_crack_to_run_and_comes_once():
     sim = ngtmc.Simulation(notched_plate(maxh=0.2, h_band=0.2, l0=0.1), ngtmc.Schedule([0.0, 0.007]),
                            ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7), compile=False,
                            adapt=Adaptivity(h_crack=0.025, corridor=0.1))
-    assert not adapt.corridor_due(sim.rows, sim.refinements)
+    assert not adapt_corridor.corridor_due(sim.rows, sim.refinements)
     peak = 600.0
     for forces, due in (([0.0, 400.0, peak], False), ([0.0, peak, 0.96 * peak], False),
                         ([0.0, peak, 0.94 * peak], True), ([0.0, peak, 0.5 * peak, 0.99 * peak], False)):
         sim.rows = [{"step": i, "force": f} for i, f in enumerate(forces)]
-        assert adapt.corridor_due(sim.rows, sim.refinements) is due, forces
+        assert adapt_corridor.corridor_due(sim.rows, sim.refinements) is due, forces
     # round-off about zero before contact (a fall of 1e-13 N/mm) does not count as the drop
     sim.rows = [{"step": i, "force": f} for i, f in enumerate([-0.0, 1e-12, 5e-13, peak, 0.9 * peak, 0.8 * peak])]
     sim.refinements = [(3, None)]           # before the drop (step 4): still due
-    assert adapt.corridor_due(sim.rows, sim.refinements)
+    assert adapt_corridor.corridor_due(sim.rows, sim.refinements)
     sim.refinements = [(3, None), (5, None)]   # one after it: done
-    assert not adapt.corridor_due(sim.rows, sim.refinements)
+    assert not adapt_corridor.corridor_due(sim.rows, sim.refinements)
     sim.rows = [{"step": i, "force": f} for i, f in enumerate([0.0, peak, 0.9 * peak, 0.8 * peak])]
     sim.refinements = [(1, None)]           # before the drop (step 2): still due
-    assert adapt.corridor_due(sim.rows, sim.refinements)
+    assert adapt_corridor.corridor_due(sim.rows, sim.refinements)
     sim.refinements = [(1, None), (3, None)]   # one after it: done
-    assert not adapt.corridor_due(sim.rows, sim.refinements)
-    assert adapt.CORRIDOR_DROP == 0.95
+    assert not adapt_corridor.corridor_due(sim.rows, sim.refinements)
+    assert adapt_corridor.CORRIDOR_DROP == 0.95
     assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0.1})["adapt"].corridor == 0.1
     assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == 0.0
