@@ -228,6 +228,14 @@ def _per_element(values: np.ndarray, ne: int) -> np.ndarray:
     return values.reshape(ne, values.size // ne)
 
 
+def _at_points(solver, cf) -> np.ndarray:
+    """A CoefficientFunction at the solver's history points, (elements, points per element); a
+    copy (the scratch vector it is interpolated into is reused)."""
+    scratch = solver._scratch_irs
+    scratch.Interpolate(cf)
+    return _per_element(scratch.vec.FV().NumPy().copy(), solver.mesh.ne)
+
+
 def _element_regions(solver) -> tuple[np.ndarray, np.ndarray]:
     """Boolean masks over the elements: in a fracture region, in the void (rho < 1/2)."""
     mesh = solver.mesh
@@ -283,12 +291,9 @@ def mark(solver, adapt: Adaptivity, H: np.ndarray | None = None, remesher=None) 
     flags = np.zeros(ne, dtype=bool)
     if solver.alpha is not None:
         H = solver.H_committed if H is None else H
-        scratch = solver._scratch_irs
-        scratch.Interpolate(solver.Gc / (6.0 * solver.l0))
-        Hc = _per_element(scratch.vec.FV().NumPy().copy(), ne)
+        Hc = _at_points(solver, solver.Gc / (6.0 * solver.l0))
         Hn = _per_element(np.asarray(H), ne)
-        scratch.Interpolate(solver.alpha)
-        al = _per_element(scratch.vec.FV().NumPy(), ne)
+        al = _at_points(solver, solver.alpha)
         crack = ((Hn >= adapt.history_fraction * Hc).any(axis=1) | (al > adapt.alpha_threshold).any(axis=1)) & frac
         flags |= crack
     if adapt.h_void is not None and void.any():

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
-from .adapt import Adaptivity, _centroids, _coarse, _element_regions, _per_element, targets
+from .adapt import Adaptivity, _at_points, _centroids, _coarse, _element_regions, targets
 from .materials import deformation_gradient
 
 __all__ = ["corridor", "corridor_due", "CORRIDOR_DROP"]
@@ -39,7 +39,7 @@ def corridor_due(rows: list[dict], refinements: list[tuple]) -> bool:
 
 
 def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None) -> np.ndarray:
-    """Elements to refine besides ``marked`` (:func:`mark`) where the crack runs: those of the
+    """Elements to refine besides ``marked`` (:func:`ngtmc.adapt.mark`) where the crack runs: those of the
     fracture regions, still coarser than their target, whose centroid lies within
     ``adapt.corridor`` (mm) of the line through the centroid of the crack's front (the marked
     elements of the fracture regions) in the crack's direction, from ``adapt.corridor`` behind
@@ -59,9 +59,7 @@ def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None) -> np
         return out
     frac, _ = _element_regions(solver)
     front = marked & frac
-    scratch = solver._scratch_irs
-    scratch.Interpolate(solver.alpha)
-    damaged = (_per_element(scratch.vec.FV().NumPy(), solver.mesh.ne) > 0.5).any(axis=1) & frac
+    damaged = (_at_points(solver, solver.alpha) > 0.5).any(axis=1) & frac
     if not front.any() or not damaged.any():
         return out
     c = _centroids(solver.mesh)
@@ -89,21 +87,19 @@ def _crack_direction(solver, front: np.ndarray, ray: np.ndarray) -> np.ndarray |
     vertical crack (this direction: 1.2 degrees); the corridor then left the crack's one side
     coarse near the beam's top, where four more refinements, each settled, followed
     (docs/adaptivity.md, "The corridor's direction")."""
+    length = float(np.linalg.norm(ray))
+    if not length > 0:
+        return None
     mesh, dim = solver.mesh, solver.mesh.dim
     F = deformation_gradient(solver.u)
     E = 0.5 * (F.trans * F - ngs.Id(dim))
     volume = ngs.Integrate(ngs.CoefficientFunction(1.0), mesh, element_wise=True).NumPy()[front]
-    scratch = solver._scratch_irs
     mean = np.empty((dim, dim))
     for i in range(dim):
         for j in range(i, dim):
-            scratch.Interpolate(E[i, j])
-            e = _per_element(scratch.vec.FV().NumPy(), mesh.ne)[front].mean(axis=1)
+            e = _at_points(solver, E[i, j])[front].mean(axis=1)
             mean[i, j] = mean[j, i] = np.average(e, weights=volume)
     w, v = np.linalg.eigh(mean)
-    length = float(np.linalg.norm(ray))
-    if not length > 0:
-        return None
     if not (w[-1] > 0 and w[-1] - w[-2] > 1e-9 * np.abs(w).max()):
         return ray / length   # no opening, or no distinct direction of it: the ray as it is
     opening = v[:, -1]
