@@ -113,9 +113,10 @@ class Remesher:
             out[np.flatnonzero(sel)[np.isfinite(d)]] = True
         return out
 
-    def add(self, mesh, marked: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    def add(self, mesh, marked: np.ndarray, targets: np.ndarray, within=None) -> np.ndarray:
         """Add the restrictions of the marked elements (a lattice of spacing ``targets[e]`` over
-        each); return the rows added."""
+        each; with ``within``, a function of points (n, 2), mm, to booleans, only its lattice
+        points where it is True); return the rows added."""
         xy = _coordinates(mesh)
         nodes = element_vertices(mesh)
         rows = []
@@ -131,6 +132,10 @@ class Remesher:
         if not rows:
             return np.zeros((0, 3))
         new = np.vstack(rows)
+        if within is not None:
+            new = new[np.asarray(within(new[:, :2]), dtype=bool)]
+            if not len(new):
+                return np.zeros((0, 3))
         # one point per cell of half the finest size: lattices of neighbours share their edges
         key = np.round(new[:, :2] / (0.5 * new[:, 2:].min())).astype(np.int64)
         _, first = np.unique(key, axis=0, return_index=True)
@@ -315,17 +320,24 @@ def move(sim, mesh, states=None, refined=None) -> list[dict]:
     return rest
 
 
-def remesh_step(sim, marked: np.ndarray, states: list) -> tuple:
+def remesh_step(sim, marked: np.ndarray, states: list, clip: tuple | None = None) -> tuple:
     """One refinement of a remeshed run (:class:`~ngtmc.simulation.Simulation` with
     ``Adaptivity(remesh_maxh=...)``): restrictions for the marked elements, the new mesh, the
-    simulation moved to it with its state and ``states``. Returns (record, states on the new
-    mesh); the record's elements are the marked ones of the old mesh (a resume replays the
+    simulation moved to it with its state and ``states``. ``clip``: (elements, within), the
+    marked elements whose restrictions are kept to the points where ``within`` holds (the
+    corridor's strip, :func:`ngtmc.adapt_corridor.corridor`). Returns (record, states on the new
+    mesh); the record's elements are the marked ones of the old mesh (a resume restores the
     restrictions, :meth:`ngtmc.simulation_state.RunState.set_state`)."""
     from .adapt import RefinementRecord, targets
     from .carried_state import balance, equilibrate
     s = sim.solver
     ne_old, dofs_old = s.mesh.ne, s.fes_u.ndof
-    sim._remesher.add(s.mesh, marked, targets(s, sim.adapt))
+    t = targets(s, sim.adapt)
+    if clip is None:
+        sim._remesher.add(s.mesh, marked, t)
+    else:
+        sim._remesher.add(s.mesh, marked & ~clip[0], t)
+        sim._remesher.add(s.mesh, marked & clip[0], t, within=clip[1])
     states = move(sim, sim._remesher.mesh(), states, refined=marked)
     s = sim.solver
     if s.alpha is not None:   # u of the step's and the saved state balanced at their carried alpha

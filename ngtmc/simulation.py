@@ -244,7 +244,8 @@ class Simulation(RunRecords, RunState, StepSchemes):
         # under dissipation control the dissipation per step is bounded by the path, not by Eq. 20
         du = ctrl.proposal(0.0 if self._path is not None else self.last_delta_wf, self.control_state)
         saved = s.get_state()
-        cutbacks = resolve_failures = 0
+        cutbacks = after_refinement = 0
+        n_refinements, refined = len(self.refinements), False
         totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
         while True:
             if self.t + du >= t_turn - 1e-12 * max(1.0, t_turn) or t_turn - (self.t + du) < 1e-3 * ctrl.du_min:
@@ -257,12 +258,13 @@ class Simulation(RunRecords, RunState, StepSchemes):
             if ok and self.adapt is not None:
                 ok, info, saved = self._refine_and_resolve(t_new, info, saved, totals)
                 s = self.solver   # a remeshed run has a new solver
-                resolve_failures += not ok
+                refined = refined or not ok or len(self.refinements) > n_refinements
             if ok:
                 t_new = info.get("t_new", t_new)  # path following solves for the load
                 break
             s.set_state(saved)
             cutbacks += 1
+            after_refinement += refined
             self.control_state, smaller = ctrl.failed(self.control_state, t_new - self.t)
             if smaller is None:
                 unit = "" if self.scene.force_controlled else " mm"  # lambda scales tractions
@@ -287,10 +289,12 @@ class Simulation(RunRecords, RunState, StepSchemes):
         self.last_delta_wf = wf - self._wf_prev
         self._wf_prev = wf
         if self._path is not None:
-            # a failed re-solve on a refined mesh is the mesh's doing, not the step size's: it cuts
-            # the step back, but sets no ceiling on dD (docs/adaptivity.md, "A refinement's failed
-            # re-solve sets no ceiling on dD")
-            self._path.accepted(step_size, totals["newton_iterations"], cutbacks - resolve_failures)
+            # a failed re-solve on a refined mesh, and a failed attempt after it from the state
+            # carried to that mesh, are the mesh's doing, not the step size's: they cut the step
+            # back, but set no ceiling on dD (docs/adaptivity.md, "A refinement's failed re-solve
+            # sets no ceiling on dD", "The corridor's line on the crack, its strip kept, and no
+            # ceiling after a refinement")
+            self._path.accepted(step_size, totals["newton_iterations"], cutbacks - after_refinement)
         self._report_progress(row)
         return row
 
@@ -302,20 +306,25 @@ class Simulation(RunRecords, RunState, StepSchemes):
         info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
         cuts the step back as for any failed step."""
         from .adapt import mark
-        from .adapt_corridor import corridor, corridor_due
+        from .adapt_corridor import corridor, corridor_due, strip
         from .bisection import refine
         from .remesh import remesh_step
         rm = self._remesher
         for _ in range(self.adapt.max_rounds):
             s = self.solver
             marked = mark(s, self.adapt, info.get("H_trial"), remesher=rm)
+            clip = None
             if self.adapt.corridor > 0 and marked.any() and corridor_due(self.rows, self.refinements):
-                marked |= corridor(s, self.adapt, marked, remesher=rm)
+                line = strip(s, self.adapt, marked)
+                if line is not None:
+                    extra = corridor(s, self.adapt, marked, remesher=rm, line=line)
+                    marked |= extra
+                    clip = (extra, line.contains)
             if not marked.any():
                 break
             previous = self._path.predictor.states() if self._path is not None else []
             if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
-                record, (saved, *previous) = remesh_step(self, marked, [saved, *previous])
+                record, (saved, *previous) = remesh_step(self, marked, [saved, *previous], clip=clip)
                 s = self.solver
             else:
                 record, (saved, *previous) = refine(s, marked, [saved, *previous])

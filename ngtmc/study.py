@@ -51,7 +51,7 @@ SOLVER_PARAMETERS = {
                                  "for several steps"),
     "amr_corridor": (0.0, "mm", "with h_crack: half width of a corridor refined along the crack's path ahead of "
                                 "its front at the first refinement after the crack starts to run (the force below 0.95 of its peak; "
-                                "Adaptivity.corridor), so that the crack runs with fewer refinements; 0: none"),
+                                "Adaptivity.corridor), so that the crack runs with fewer refinements; about 4 l0 or more; 0: none"),
     "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
                               "Adaptivity.h_void); 0: the void is not refined"),
     "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "

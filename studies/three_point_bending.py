@@ -262,15 +262,17 @@ most (h = 0.0075 mm). The whole-curve time goes to the refinements in the crack 
 the refined mesh has no equilibrium at its load and is settled below it, and neither keeping the
 elements outside the refined zone nor an exact (nested, shape-keeping red-green) transfer
 changes that (docs/adaptivity.md, "Why a refinement in the crack run needs a settle").
-``--set amr_corridor=0.1`` refines a corridor along the crack's path once the crack runs: at quick
-(from ``h_band=0.06`` to ``h_crack=0.015``, remeshed) the whole curve in 124-149 s against 400 s
-without it (one refinement in the crack run instead of 18; the quick band 97 s). At the paper's
-resolution, with ``amr_corridor=0.15`` (the corridor along the crack's opening, and no ceiling
-on dD from a failed re-solve; 2026-12-05), nothing is refined after the corridor, and the whole
-curve takes **1106 s against the band run's 1093 s** side by side (+1.2 %: level, not less): 2.8
-times faster to the peak (55 s against 156 s), ahead down to 16 N/mm, behind in the tail (84
-steps against 77 from 16 N/mm on); the crack 0.63 h from the band's on average, 1.28 h at most
-(docs/adaptivity.md, "The paper's resolution with both").
+``--set amr_corridor=W`` refines a strip of half width W along the crack's path once the crack
+runs: at quick (from ``h_band=0.06`` to ``h_crack=0.015``, remeshed) the whole curve without
+further refinement with W = 0.12 mm (4 l0; 83 steps, 445 Newton iterations against 18 refinements
+and 400 s without a corridor; the quick band 82 steps, 387 iterations). At the paper's resolution
+with ``amr_corridor=0.12`` (the strip on the crack's line, kept to itself, and no ceiling on dD
+from the cut-backs after a refinement; 2026-12-05) nothing is refined after the corridor, and
+the whole curve takes **882 s against the band run's 1027 s** side by side (-14 %; 172 steps and
+998 Newton iterations against 163 and 881, at 22007 elements against 29938): 2.4 times faster to
+the peak; the crack 0.52 h from the band's on average, 1.30 h at most (docs/adaptivity.md, "The
+corridor's line on the crack, its strip kept, and no ceiling after a refinement"). With 0.1 mm
+(3.3 l0) the damaged zone, widening in the tail, left the strip.
 """
 from __future__ import annotations
 

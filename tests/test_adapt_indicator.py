@@ -106,11 +106,13 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     assert not corridor(s, a, front).any()
 
 
-def test_corridor_runs_across_the_fronts_opening_not_along_an_off_line_ray():
+def test_corridor_runs_on_the_crack_across_the_fronts_opening_not_along_an_off_line_ray():
     """The corridor's direction is the ray from the damaged zone to the front without its component
-    along the front's largest principal strain: with the front's centroid 0.1 mm off a straight
-    crack along y = 0.5 (the ray leans about 30 degrees) and the plate stretched in y (1 %), the
-    corridor runs along x through the front, as the crack does; unstretched, it follows the ray."""
+    along the front's largest principal strain, and its line lies on the damaged elements next to
+    the front, across that strain: with the front's centroid 0.1 mm off a straight crack along
+    y = 0.5 (the ray leans about 30 degrees) and the plate stretched in y (1 %), the corridor runs
+    along x on the crack's line y = 0.5, not through the front's centroid; unstretched (no
+    opening), it follows the ray from the front's centroid."""
     import ngsolve as ngs
     from ngtmc.adapt_corridor import corridor
     w = 0.08
@@ -125,9 +127,11 @@ def test_corridor_runs_across_the_fronts_opening_not_along_an_off_line_ray():
     s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))
     along = corridor(s, a, front)
     assert along.any() and c[along, 0].max() > 0.85
-    assert np.all(np.abs(c[along, 1] - tip[1]) <= w)
+    ahead = along & (c[:, 0] > tip[0] + w)
+    assert np.all(np.abs(c[ahead, 1] - 0.5) <= w + 0.01)   # the damaged elements' centroid: y = 0.5 to the mesh's asymmetry
+    assert abs(np.mean(c[ahead, 1]) - 0.5) < 0.2 * w     # centred on the crack, not on y = 0.6
     coarse = s.h > 0.03 * (1 + 1e-9)
-    on_line = coarse & ~front & (c[:, 0] > tip[0] + w) & (np.abs(c[:, 1] - tip[1]) < 0.5 * w)
+    on_line = coarse & ~front & (c[:, 0] > tip[0] + w) & (np.abs(c[:, 1] - 0.5) < 0.5 * w)
     assert on_line.any() and np.all(along[on_line])
 
 
@@ -167,3 +171,41 @@ def test_corridor_waits_for_the_crack_to_run_and_comes_once():
     assert adapt_corridor.CORRIDOR_DROP == 0.95
     assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0.1})["adapt"].corridor == 0.1
     assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == 0.0
+
+
+def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_edges():
+    """Remeshed (ngtmc.remesh), the corridor holds every coarse fracture element with its centroid
+    or a vertex in the strip (more than by bisection, which refines whole elements by their
+    centroids), and the remesher keeps their restrictions to the strip: the new mesh is fine
+    along the crack's line ahead of the front and coarse beyond the strip's half width plus the
+    grading, where the whole elements' restrictions reach further out."""
+    import dataclasses
+    import ngsolve as ngs
+    import ngtmc
+    from ngtmc import remesh
+    from ngtmc.adapt_corridor import corridor, strip
+    w, h = 0.08, 0.03
+    s = _plate_cracked_to(0.5)
+    s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))
+    c = _centroids(s.mesh)
+    front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.5) < 0.06)
+    a = Adaptivity(h_crack=h, corridor=w, remesh_maxh=0.2)
+    rm = remesh.Remesher(s.mesh, 0.2)
+    line = strip(s, a, front)
+    assert line is not None and abs(line.origin[1] - 0.5) < 0.01 and abs(line.direction[0]) > 0.999
+    by_centroid = corridor(s, a, front, line=line)
+    extra = corridor(s, a, front, remesher=rm, line=line)
+    assert np.all(extra[by_centroid]) and extra.sum() > by_centroid.sum()
+    t = adapt.targets(s, a)
+    whole = remesh.Remesher(s.mesh, 0.2).add(s.mesh, extra, t)
+    kept = rm.add(s.mesh, extra, t, within=line.contains)
+    assert len(kept) and line.contains(kept[:, :2]).all() and not line.contains(whole[:, :2]).all()
+    fine = ngtmc.Solver(dataclasses.replace(s.scene, mesh=rm.mesh()))
+    cf = _centroids(fine.mesh)
+    ahead = (cf[:, 0] > line.origin[0] + w) & (cf[:, 0] < 0.95)
+    on_line = ahead & (np.abs(cf[:, 1] - 0.5) < w - h)
+    outside = ahead & (np.abs(cf[:, 1] - 0.5) > w + 3 * h)
+    print(f"\nstrip: longest edges {np.median(fine.h[on_line]):.4f} mm (median), {fine.h[on_line].max():.4f} mm (max); "
+          f"beyond it {np.median(fine.h[outside]):.4f} mm (median); target {h} mm")
+    assert on_line.any() and np.median(fine.h[on_line]) <= 1.2 * h and fine.h[on_line].max() <= 1.3 * h
+    assert outside.any() and np.median(fine.h[outside]) > 2 * h

@@ -511,7 +511,9 @@ def test_stop_after_drop_ends_the_run_once_the_force_has_fallen():
 def test_a_failed_re_solve_on_a_refined_mesh_cuts_back_but_sets_no_ceiling(monkeypatch):
     """A step whose re-solve on a refined mesh failed (Simulation._refine_and_resolve) is cut back,
     and the history counts the cut-back, but the path's sizing hears of none (no ceiling on dD:
-    the failure is the mesh's doing); a failure of the step's own solve is heard as before."""
+    the failure is the mesh's doing), nor of a failed attempt after it (from the state carried to
+    the refined mesh); a failure of the step's own solve before any refinement is heard as
+    before."""
     from ngtmc.adapt import Adaptivity
     sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
                            scheme="path-following", adapt=Adaptivity(h_crack=0.05))
@@ -536,8 +538,7 @@ def test_a_failed_re_solve_on_a_refined_mesh_cuts_back_but_sets_no_ceiling(monke
 
     def own_attempt(t_new):
         ok, info = attempt(t_new)
-        if fail_attempt:
-            fail_attempt.pop()
+        if fail_attempt and fail_attempt.pop(0):
             return False, info
         return ok, info
 
@@ -550,3 +551,11 @@ def test_a_failed_re_solve_on_a_refined_mesh_cuts_back_but_sets_no_ceiling(monke
     assert row["cutbacks"] == 1 and heard == [0, 1]
     row = sim.advance()
     assert row["cutbacks"] == 0 and heard == [0, 1, 0]
+    fail_resolve.append(True)           # the re-solve fails, then the attempt after it
+    fail_attempt.extend([False, True])
+    row = sim.advance()
+    assert row["cutbacks"] == 2 and heard == [0, 1, 0, 0]
+    fail_attempt.extend([True])         # the step's own solve fails, then the re-solve
+    fail_resolve.append(True)
+    row = sim.advance()
+    assert row["cutbacks"] == 2 and heard == [0, 1, 0, 0, 1]
