@@ -29,6 +29,7 @@ from .scene import Scene
 from .schemes import PATH_STEPS, SCHEMES, StepSchemes
 from .solver import NewtonOptions, Solver
 from .simulation_records import RunRecords
+from .simulation_refine import RunRefinement
 from .simulation_state import RunState
 from .stepping import AdaptiveStepControl, ControlState, Schedule
 
@@ -91,7 +92,7 @@ def check_stop_after_drop(value, schedule: Schedule | None = None):
                          "drop the force and stop the run")
 
 
-class Simulation(RunRecords, RunState, StepSchemes):
+class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
     """Load-stepping run of a scene (see the module docstring).
 
     Parameters
@@ -297,56 +298,6 @@ class Simulation(RunRecords, RunState, StepSchemes):
             self._path.accepted(step_size, totals["newton_iterations"], cutbacks - after_refinement)
         self._report_progress(row)
         return row
-
-    def _refine_and_resolve(self, t_new: float, info: dict, saved: dict, totals: dict):
-        """After a converged step to ``t_new``: mark (:func:`ngtmc.adapt.mark`, on the step's trial
-        history), refine and transfer the state of the step and ``saved`` (the state before it),
-        then solve the step again on the refined mesh from ``saved`` with the refined solution as
-        predictor; repeat until nothing is marked (at most ``max_rounds`` times). Returns (ok,
-        info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
-        cuts the step back as for any failed step."""
-        from .adapt import mark
-        from .adapt_corridor import corridor, corridor_due, strip
-        from .bisection import refine
-        from .remesh import remesh_step
-        rm = self._remesher
-        for _ in range(self.adapt.max_rounds):
-            s = self.solver
-            marked = mark(s, self.adapt, info.get("H_trial"), remesher=rm)
-            clip = None
-            if self.adapt.corridor > 0 and marked.any() and corridor_due(self.rows, self.refinements):
-                line = strip(s, self.adapt, marked)
-                if line is not None:
-                    extra = corridor(s, self.adapt, marked, remesher=rm, line=line)
-                    marked |= extra
-                    clip = (extra, line.contains)
-            if not marked.any():
-                break
-            previous = self._path.predictor.states() if self._path is not None else []
-            if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
-                record, (saved, *previous) = remesh_step(self, marked, [saved, *previous], clip=clip)
-                s = self.solver
-            else:
-                record, (saved, *previous) = refine(s, marked, [saved, *previous])
-                if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
-                    self.coupled.mesh_changed()
-            self.refinements.append((self.step + 1, record))
-            pred = s.get_state()   # the refined solution (its load: path following solves for it)
-            s.set_state(saved)
-            s.u.vec.FV().NumPy()[:] = pred["u"]
-            if self._path is not None:
-                # the same kind of step (dissipation dD, or displacement) from the refined solution
-                self._path.mesh_changed(saved, previous)
-                s.alpha.vec.FV().NumPy()[:] = pred["alpha"]
-                ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new), at_load=rm is not None)
-            else:
-                ok, info = self._attempt(t_new)
-            for k in totals:
-                totals[k] += info[k]
-            if not ok:
-                info["message"] = f"re-solve on the refined mesh failed ({info.get('message', '')})"
-                return False, info, saved
-        return True, info, saved
 
     def _force_control_peak(self) -> str:
         """Under force control (only Traction loads), a message when the last accepted steps show a

@@ -1,0 +1,63 @@
+"""Refinement during a run: after a converged step, mark, refine (bisection or remeshing) and
+solve the step again on the refined mesh. The base of :class:`ngtmc.simulation.Simulation` (its
+attributes ``solver``, ``adapt``, ``coupled``, ``_path``, ``_remesher``, ``rows``, ``step`` and
+``refinements`` are set there, and its ``_attempt`` solves a step); the indicators live in
+:mod:`ngtmc.adapt` and :mod:`ngtmc.adapt_corridor`, the refinement and transfer in
+:mod:`ngtmc.bisection` and :mod:`ngtmc.remesh`. Units: mm."""
+from __future__ import annotations
+
+__all__ = ["RunRefinement"]
+
+
+class RunRefinement:
+    """The predictor-corrector refinement of a :class:`~ngtmc.simulation.Simulation`'s step."""
+
+    def _refine_and_resolve(self, t_new: float, info: dict, saved: dict, totals: dict):
+        """After a converged step to ``t_new``: mark (:func:`ngtmc.adapt.mark`, on the step's trial
+        history), refine and transfer the state of the step and ``saved`` (the state before it),
+        then solve the step again on the refined mesh from ``saved`` with the refined solution as
+        predictor; repeat until nothing is marked (at most ``max_rounds`` times). Returns (ok,
+        info, saved on the current mesh); on a failed re-solve the caller restores ``saved`` and
+        cuts the step back as for any failed step."""
+        from .adapt import mark
+        from .adapt_corridor import corridor, corridor_due, strip
+        from .bisection import refine
+        from .remesh import remesh_step
+        rm = self._remesher
+        for _ in range(self.adapt.max_rounds):
+            s = self.solver
+            marked = mark(s, self.adapt, info.get("H_trial"), remesher=rm)
+            clip = None
+            if self.adapt.corridor > 0 and marked.any() and corridor_due(self.rows, self.refinements):
+                line = strip(s, self.adapt, marked)
+                if line is not None:
+                    extra = corridor(s, self.adapt, marked, remesher=rm, line=line)
+                    marked |= extra
+                    clip = (extra, line.contains)
+            if not marked.any():
+                break
+            previous = self._path.predictor.states() if self._path is not None else []
+            if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
+                record, (saved, *previous) = remesh_step(self, marked, [saved, *previous], clip=clip)
+                s = self.solver
+            else:
+                record, (saved, *previous) = refine(s, marked, [saved, *previous])
+                if self.coupled is not None:  # its compound space follows the solver's, its forms are kept
+                    self.coupled.mesh_changed()
+            self.refinements.append((self.step + 1, record))
+            pred = s.get_state()   # the refined solution (its load: path following solves for it)
+            s.set_state(saved)
+            s.u.vec.FV().NumPy()[:] = pred["u"]
+            if self._path is not None:
+                # the same kind of step (dissipation dD, or displacement) from the refined solution
+                self._path.mesh_changed(saved, previous)
+                s.alpha.vec.FV().NumPy()[:] = pred["alpha"]
+                ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new), at_load=rm is not None)
+            else:
+                ok, info = self._attempt(t_new)
+            for k in totals:
+                totals[k] += info[k]
+            if not ok:
+                info["message"] = f"re-solve on the refined mesh failed ({info.get('message', '')})"
+                return False, info, saved
+        return True, info, saved
