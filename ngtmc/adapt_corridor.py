@@ -5,8 +5,8 @@ coarse elements one refinement (and one settle) at a time.
 :func:`corridor_due` decides when (from the history alone), :func:`strip` where (a strip along
 the crack's line, in the direction :func:`_crack_direction` gives), :func:`corridor` which
 elements. :class:`~ngtmc.simulation.Simulation` adds them to the marked elements of
-:func:`ngtmc.adapt.mark`; a remeshed run keeps their restrictions to the strip. Measured in docs/adaptivity.md ("A corridor
-along the crack's path" and the sections after it). Units: mm.
+:func:`ngtmc.adapt.mark`; a remeshed run keeps their restrictions to the strip. Measured in
+docs/adaptivity.md ("A corridor along the crack's path" and the sections after it). Units: mm.
 """
 from __future__ import annotations
 
@@ -50,14 +50,12 @@ class Strip:
     direction: np.ndarray
     half_width: float
 
-    def contains(self, points: np.ndarray, margin=0.0) -> np.ndarray:
-        """Whether each of ``points`` (n, dim), mm, lies in the strip widened by ``margin`` (mm,
-        a number or one per point)."""
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        """Whether each of ``points`` (n, dim), mm, lies in the strip."""
         rel = np.asarray(points, dtype=float)[:, :len(self.origin)] - self.origin
         along = rel @ self.direction
         across = np.linalg.norm(rel - along[:, None] * self.direction, axis=1)
-        limit = self.half_width + np.asarray(margin, dtype=float)
-        return (along >= -limit) & (across <= limit)
+        return (along >= -self.half_width) & (across <= self.half_width)
 
 
 def strip(solver, adapt: Adaptivity, marked: np.ndarray) -> Strip | None:
@@ -128,9 +126,10 @@ def _on_the_crack(mesh, tip: np.ndarray, opening: np.ndarray, near: np.ndarray) 
 
     Why: the front's centroid lies where the mesh is still coarse, off the crack's line. In the
     paper-resolution three-point bending with the direction mended, the corridor of 0.15 mm ran
-    parallel to the crack but 0.045 mm beside it (its fine elements at x = 3.89 to 4.20 mm, the
-    crack at x = 4.0 mm): a third of its width on the crack's one side was refined for nothing,
-    and a narrower corridor left the damaged zone (docs/adaptivity.md, "The corridor's line")."""
+    parallel to the crack but beside it (its fine elements at x = 3.89 to 4.20 mm, the crack at
+    x = 3.99 to 4.02 mm); with the line moved, the front's centroid at x = 4.012 mm gave the
+    line's origin at 4.002 mm (docs/adaptivity.md, "The corridor's line on the crack, its strip
+    kept, and no ceiling after a refinement")."""
     if not near.any():
         return tip
     m = np.average(_centroids(mesh)[near], axis=0, weights=_areas(mesh)[near])
