@@ -17,6 +17,7 @@ import ngsolve as ngs
 
 from .adapt import Adaptivity, _at_points, _centroids, _coarse, _coordinates, _element_regions, targets
 from .materials import deformation_gradient
+from .scene import element_vertices
 
 __all__ = ["corridor", "corridor_due", "strip", "Strip", "CORRIDOR_DROP"]
 
@@ -106,9 +107,7 @@ def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None, line:
     mesh = solver.mesh
     inside = line.contains(_centroids(mesh))
     if remesher is not None:
-        from .scene import element_vertices
-        nodes = element_vertices(mesh)
-        inside |= line.contains(_coordinates(mesh))[nodes].any(axis=1)
+        inside |= line.contains(_coordinates(mesh))[element_vertices(mesh)].any(axis=1)
     frac, _ = _element_regions(solver)
     coarse = _coarse(solver, adapt, targets(solver, adapt), remesher)
     return frac & coarse & inside & ~marked

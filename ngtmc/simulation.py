@@ -246,7 +246,7 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
         du = ctrl.proposal(0.0 if self._path is not None else self.last_delta_wf, self.control_state)
         saved = s.get_state()
         cutbacks = after_refinement = 0
-        n_refinements, refined = len(self.refinements), False
+        n_refinements = len(self.refinements)   # a cut-back after one of this step's refinements is the mesh's doing
         totals = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
         while True:
             if self.t + du >= t_turn - 1e-12 * max(1.0, t_turn) or t_turn - (self.t + du) < 1e-3 * ctrl.du_min:
@@ -259,13 +259,12 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
             if ok and self.adapt is not None:
                 ok, info, saved = self._refine_and_resolve(t_new, info, saved, totals)
                 s = self.solver   # a remeshed run has a new solver
-                refined = refined or not ok or len(self.refinements) > n_refinements
             if ok:
                 t_new = info.get("t_new", t_new)  # path following solves for the load
                 break
             s.set_state(saved)
             cutbacks += 1
-            after_refinement += refined
+            after_refinement += len(self.refinements) > n_refinements
             self.control_state, smaller = ctrl.failed(self.control_state, t_new - self.t)
             if smaller is None:
                 unit = "" if self.scene.force_controlled else " mm"  # lambda scales tractions

@@ -528,8 +528,9 @@ def test_a_failed_re_solve_on_a_refined_mesh_cuts_back_but_sets_no_ceiling(monke
     fail_resolve, fail_attempt = [True], []
 
     def refine_and_resolve(t_new, info, saved, totals):
-        if fail_resolve:
+        if fail_resolve:   # a re-solve follows a refinement, recorded before it
             fail_resolve.pop()
+            sim.refinements.append((sim.step + 1, None))
             info["message"] = "re-solve on the refined mesh failed (made to fail)"
             return False, info, saved
         return True, info, saved
