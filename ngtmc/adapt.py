@@ -157,7 +157,9 @@ class Adaptivity:
 class RefinementRecord:
     """One refinement: elements marked, elements and displacement dofs before and after, and the
     numbers of the marked elements (in the mesh before the refinement), from which
-    :func:`~ngtmc.bisection.replay` makes the same mesh again."""
+    :func:`~ngtmc.bisection.replay` makes the same mesh again; ``equilibrium``: whether the state
+    before the step is an equilibrium of the new mesh (False where a remesh's carried state found
+    none, :func:`ngtmc.carried_state.equilibrate`; not recorded in the run folder)."""
 
     marked: int
     elements_before: int
@@ -165,6 +167,7 @@ class RefinementRecord:
     dofs_before: int
     dofs_after: int
     elements: np.ndarray | None = None
+    equilibrium: bool = True
 
     _COUNTS = ("marked", "elements_before", "elements_after", "dofs_before", "dofs_after")
 

@@ -42,12 +42,14 @@ def balance(solver, state: dict, in_place: bool = False) -> dict:
     return out
 
 
-def equilibrate(sim, state: dict) -> dict:
+def equilibrate(sim, state: dict) -> tuple[dict, bool]:
     """``state`` (carried to a new mesh) brought to equilibrium there at its load, and committed
     (H may only grow, alpha with it): :func:`_equilibrium` (the coupled Newton, and except under
     path following the converged staggered passes); where that fails, the state made
     :func:`consistent` with its history and, under path following, :func:`settle`-d below its
-    load; the state as it is where the scene has no phase field.
+    load; the state as it is where the scene has no phase field. Returns (the state, whether it
+    is an equilibrium of the new mesh: False where the settle found none either, and the state is
+    only consistent).
 
     Why: the interpolated fields are not an equilibrium of the new mesh. The phase field that the
     carried history drives on the new mesh differs from the carried alpha, so the state before the
@@ -56,15 +58,17 @@ def equilibrate(sim, state: dict) -> dict:
     dissipation step down to 1/128 of the base (the quick three-point bending's fourth remesh)."""
     s = sim.solver
     if s.alpha is None:
-        return state
+        return state, True
     current = s.get_state()
     out = _equilibrium(sim, state, float(state["load"]))
-    if out is None:
+    found = out is not None
+    if not found:
         out = consistent(s, state)
         if sim._path is not None:
-            out = settle(sim, out)
+            settled = settle(sim, out)
+            found, out = settled is not out, settled
     s.set_state(current)
-    return out
+    return out, found
 
 
 def _equilibrium(sim, state: dict, load: float, u_first: bool = False) -> dict | None:

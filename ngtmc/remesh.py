@@ -343,7 +343,7 @@ def remesh_step(sim, marked: np.ndarray, states: list, clip: tuple | None = None
     if s.alpha is not None:   # u of the step's and the saved state balanced at their carried alpha
         balance(s, s.get_state(), in_place=True)
         states[0] = balance(s, states[0])
-    states[0] = equilibrate(sim, states[0])   # may settle it below its load (the path follows it)
+    states[0], found = equilibrate(sim, states[0])   # may settle it below its load (the path follows it)
     record = RefinementRecord(int(marked.sum()), ne_old, sim.solver.mesh.ne, dofs_old, sim.solver.fes_u.ndof,
-                              np.flatnonzero(marked).astype(np.int64))
+                              np.flatnonzero(marked).astype(np.int64), equilibrium=found)
     return record, states

@@ -36,7 +36,12 @@ class RunRefinement:
                     clip = (extra, line.contains)
             if not marked.any():
                 break
-            previous = self._path.predictor.states() if self._path is not None else []
+            # the secant predictor's state before the last one: carried by bisection (nested, exact);
+            # not across a remesh, where the state before the step is equilibrated, settled or
+            # made consistent on the new mesh and the older one only interpolated, so that the
+            # secant through them points along the carry's error, not along the path
+            # (docs/adaptivity.md, "The secant predictor restarts after a remesh")
+            previous = self._path.predictor.states() if self._path is not None and rm is None else []
             if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
                 record, (saved, *previous) = remesh_step(self, marked, [saved, *previous], clip=clip)
                 s = self.solver
@@ -52,7 +57,10 @@ class RunRefinement:
                 # the same kind of step (dissipation dD, or displacement) from the refined solution
                 self._path.mesh_changed(saved, previous)
                 s.alpha.vec.FV().NumPy()[:] = pred["alpha"]
-                ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new), at_load=rm is not None)
+                if record.equilibrium:
+                    ok, info = self._path.resolve(float(pred["load"]), info.get("t_new", t_new), at_load=rm is not None)
+                else:   # no equilibrium of the carried state near its load: its crack grows at that load
+                    ok, info = self._path.grow_at_load(saved)
             else:
                 ok, info = self._attempt(t_new)
             for k in totals:

@@ -293,18 +293,23 @@ def test_monolithic_scheme_runs_with_refinement():
 def test_path_following_runs_with_refinement():
     """Path following (the three-point bending's default scheme) with refinement: a refined step
     is solved again as the same kind of step (a dissipation step of the same dD, or a displacement
-    step to the same load) from the refined solution. The notched plate's crack runs through its
-    snap-back on the refined mesh (the load falls back over accepted steps), the dissipated energy
-    never decreases, the last state is an equilibrium of the final mesh, and the peak is that of
-    the same scheme on the final mesh from the start, to 2 %."""
+    step to the same load) from the refined solution, the secant predictor going on through the
+    refined states. The notched plate's crack runs through its snap-back on the refined mesh (the
+    load falls back over accepted steps), the dissipated energy never decreases, the last state is
+    an equilibrium of the final mesh, and the peak is that of the same scheme on the final mesh
+    from the start, to 2 %."""
     scene = notched_plate(maxh=0.2, h_band=0.2, l0=0.1)
     control = ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7)
     sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following",
                            adapt=Adaptivity(h_crack=0.1))
+    carried = []   # the secant predictor's older states carried across each bisection
+    mesh_changed = sim._path.mesh_changed
+    sim._path.mesh_changed = lambda before, previous=(): carried.append(len(previous)) or mesh_changed(before, previous)
     h = sim.run().history
     load, force = h["load"].to_numpy(), h["force"].to_numpy()
     refined_steps = sorted({step for step, _ in sim.refinements})
     assert refined_steps and h["elements"].iloc[-1] > h["elements"].iloc[0]
+    assert any(carried)   # bisection carries the secant's older state (exactly, nested meshes)
     assert sim._path.coupled is sim.coupled and sim.coupled.nu == sim.solver.fes_u.ndof
     assert np.any(np.diff(load) < 0) and load[-1] == pytest.approx(0.007)
     assert np.all(np.diff(h["dissipated_energy"].to_numpy()) >= -1e-12 * h["dissipated_energy"].max())

@@ -172,6 +172,42 @@ def test_settled_state_is_an_equilibrium_below_its_load():
     assert sim.coupled.solve(float(out["load"])).iterations == 0
 
 
+def test_a_carried_state_without_equilibrium_is_reported_and_grows_its_crack_at_its_load(monkeypatch):
+    """equilibrate reports whether the carried state is an equilibrium of the new mesh: where
+    neither its load nor a settle below it has one, it returns the consistent state and False.
+    From such a state (here an accepted state carried to a load 20 % higher, made consistent: its
+    u there strains the crack beyond its history), DissipationPath.grow_at_load takes a displacement
+    step at its load with the fallback: the crack grows at that load (D rises, alpha never falls)
+    to an equilibrium there, and the path goes on with displacement steps."""
+    scene = notched_plate(maxh=MAXH, h_band=0.2, l0=0.1)
+    control = ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7)
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.012]), control, compile=True, scheme="path-following")
+    while sim.solver.load < 0.005:
+        sim.advance()
+    s, path = sim.solver, sim._path
+    state = s.get_state()
+    out, found = carried_state.equilibrate(sim, state)
+    assert found and float(out["load"]) == float(state["load"])
+    raised = dict(state, load=np.array(1.2 * float(state["load"])))
+    with monkeypatch.context() as m:
+        m.setattr(carried_state, "_equilibrium", lambda *a, **k: None)
+        out, found = carried_state.equilibrate(sim, raised)
+    assert not found and float(out["load"]) == float(raised["load"])
+    assert np.all(out["alpha"] >= state["alpha"] - 1e-12)
+    s.set_state(out)
+    assert sim.coupled.solve(float(out["load"])).iterations > 0   # not an equilibrium at its load
+    d0 = sim.coupled.D.value(np.asarray(out["alpha_committed"], dtype=float))
+    ok, info = path.grow_at_load(out)
+    assert ok, info.get("message")
+    assert s.load == pytest.approx(float(out["load"]), rel=1e-12)
+    assert sim.schedule.load(info["t_new"]) == pytest.approx(s.load, rel=1e-12)
+    assert sim.coupled.D.value() > d0 and np.all(s.alpha.vec.FV().NumPy() >= out["alpha_committed"] - 1e-12)
+    assert not path.dissipating
+    print(f"\ngrow at load {s.load:.6g} mm: D {d0:.5g} -> {sim.coupled.D.value():.5g} N mm/mm, "
+          f"{info['newton_iterations']} Newton iterations, {info['staggered_iterations']} staggered passes")
+    assert sim.coupled.solve(s.load).converged
+
+
 def test_equilibration_under_path_following_tries_no_fixed_load_passes(monkeypatch):
     """Where the coupled Newton finds no equilibrium of a carried state at its load, path following
     goes to settle, not to staggered passes at that load (they would grow a crack past its
@@ -211,12 +247,16 @@ def test_remeshed_path_following_run_converges_and_agrees_with_its_final_mesh():
     """The notched plate from its coarse mesh (maxh 0.2 mm, 202 elements) refined by remeshing to
     h_crack = l0/4 while the crack runs; its peak is that of the same scheme on the run's final
     mesh from the start to 2 %, every state accepted is an equilibrium, the dissipated energy
-    never decreases, and the run resumes from its checkpoint on the same mesh."""
+    never decreases, and the run resumes from its checkpoint on the same mesh. The path's secant
+    predictor restarts after each remesh (no older state is carried to the new mesh)."""
     scene = notched_plate(maxh=MAXH, h_band=0.2, l0=0.1)
     control = ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7)
     a = Adaptivity(h_crack=0.025, remesh_maxh=MAXH)
     sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.007]), control, compile=True, scheme="path-following",
                            adapt=a)
+    carried = []   # the secant predictor's older states carried across each remesh: none
+    mesh_changed = sim._path.mesh_changed
+    sim._path.mesh_changed = lambda before, previous=(): carried.append(len(previous)) or mesh_changed(before, previous)
     states = []
     for row in sim.steps():
         if len(states) < 1 and sim.refinements:
@@ -224,6 +264,7 @@ def test_remeshed_path_following_run_converges_and_agrees_with_its_final_mesh():
     h = sim.history
     force = h["force"].to_numpy()
     assert sim.refinements and h["elements"].iloc[-1] > 5 * h["elements"].iloc[0]
+    assert len(carried) == len(sim.refinements) and not any(carried)   # the secant restarts after a remesh
     assert sim._path.coupled is sim.coupled and sim.coupled.s is sim.solver
     assert np.all(np.diff(h["dissipated_energy"].to_numpy()) >= -1e-12 * h["dissipated_energy"].max())
     assert force[-1] < 0.1 * force.max()
