@@ -387,8 +387,8 @@ class DissipationPath:
         step of 1e-8 mm, where the step's last attempt took this displacement step. Measured on
         the paper three-point bending with a corridor of 0.1 mm, remeshed at 9.7 N/mm: 18
         cut-backs and 418 Newton iterations to the state that this step reaches in 287, with no
-        cut-back (docs/adaptivity.md, "A carried state with no equilibrium grows its crack at its
-        load")."""
+        cut-back (docs/adaptivity.md, "The secant predictor restarts after a remesh, and a carried
+        state with no equilibrium grows its crack at its load")."""
         info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
                 "projected": 0}
         ok, info = self._displacement_step(before, self._time_of(float(before["load"]), *self._segment()), info,

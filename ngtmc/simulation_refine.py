@@ -40,7 +40,8 @@ class RunRefinement:
             # not across a remesh, where the state before the step is equilibrated, settled or
             # made consistent on the new mesh and the older one only interpolated, so that the
             # secant through them points along the carry's error, not along the path
-            # (docs/adaptivity.md, "The secant predictor restarts after a remesh")
+            # (docs/adaptivity.md, "The secant predictor restarts after a remesh, and a carried
+            # state with no equilibrium grows its crack at its load")
             previous = self._path.predictor.states() if self._path is not None and rm is None else []
             if rm is not None:   # a new mesh from the geometry: a new solver, the state carried over
                 record, (saved, *previous) = remesh_step(self, marked, [saved, *previous], clip=clip)

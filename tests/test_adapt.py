@@ -13,7 +13,6 @@ from netgen.occ import Circle, OCCGeometry, Rectangle
 import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
-from ngtmc.discretisation import bilinear_form
 from ngtmc.remesh import history_points
 from scenes import damaged, notched_plate, refined_twice_from_homogeneous, tension_bar, two_blocks
 
