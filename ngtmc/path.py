@@ -67,6 +67,7 @@ import numpy as np
 
 from .path_predictor import SecantPredictor
 from .path_sizing import DissipationSizing
+from .schemes import attempt_info
 
 __all__ = ["DissipationPath"]
 
@@ -215,8 +216,7 @@ class DissipationPath:
         self._factor_tried = self.factor
         if self._factor_first is None:
             self._factor_first = self.factor
-        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
-                "projected": 0}
+        info = attempt_info()
         saved = s.get_state()
         du = abs(sch.load(t_new) - load_n)
         last = self._last_attempt(du)
@@ -355,8 +355,7 @@ class DissipationPath:
         remeshed run, :mod:`ngtmc.remesh`: from a state carried across non-nested meshes a
         dissipation step's load ran off). Returns (ok, info) as :meth:`attempt`."""
         sim, s = self.sim, self.sim.solver
-        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
-                "projected": 0}
+        info = attempt_info()
         if at_load or self._last_kind != "dissipation":
             ok, info = sim._coupled_newton(load, info)
             if ok:
@@ -389,8 +388,7 @@ class DissipationPath:
         cut-backs and 418 Newton iterations to the state that this step reaches in 287, with no
         cut-back (docs/adaptivity.md, "The secant predictor restarts after a remesh, and a carried
         state with no equilibrium grows its crack at its load")."""
-        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
-                "projected": 0}
+        info = attempt_info()
         ok, info = self._displacement_step(before, self._time_of(float(before["load"]), *self._segment()), info,
                                            last=True)
         if ok:

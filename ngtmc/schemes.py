@@ -94,6 +94,13 @@ def alpha_u_passes(s, load: float, max_passes: int = 1, info: dict | None = None
     return True, info
 
 
+def attempt_info() -> dict:
+    """A step attempt's ``info`` before any solve: Newton iterations, solve and assembly times
+    (s), staggered passes and alpha projections, all zero."""
+    return {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
+            "projected": 0}
+
+
 def _add(info: dict, res):
     """Add a Newton result's iterations and times to a step's ``info``."""
     info["newton_iterations"] += res.iterations
@@ -261,8 +268,7 @@ class StepSchemes:
         docs/performance.md."""
         s = self.solver
         saved = s.get_state() if self.fallback == "single-pass" else None
-        info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0,
-                "projected": 0}
+        info = attempt_info()
         res = s.solve_displacement(load, predicted=self._predict_displacement(load))
         _add(info, res)
         if not res.converged:
