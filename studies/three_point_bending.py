@@ -275,7 +275,13 @@ corridor's line on the crack, its strip kept, and no ceiling after a refinement"
 (3.3 l0) the damaged zone, widening in the tail, left the strip; with 0.15 mm the whole curve took
 1190 s against 1120 s (+6 %): the path's sizing held dD down for 32 steps after the corridor's
 refinement, which decides the whole-curve time more than the strip's width (with 0.135 mm, the
-same: 16 N/mm at 910 s against 718 s, stopped there).
+same: 16 N/mm at 910 s against 718 s, stopped there). With the secant predictor restarted after a
+remesh and a carried state without equilibrium grown at its load (2026-12-06), all three widths and
+the band run at once: -9.6 % at 0.12 mm (187 steps, 1041 Newton iterations), +12.6 % at 0.135 mm,
++10.5 % at 0.15 mm; in the tail, the remeshed runs' cut-backs as the band run's come from Newton
+steps that invert fully broken elements at the crack's tip (docs/adaptivity.md, "The secant
+predictor restarts after a remesh, and a carried state with no equilibrium grows its crack at its
+load").
 """
 from __future__ import annotations
 
