@@ -68,6 +68,8 @@ def strip(solver, adapt: Adaptivity, marked: np.ndarray) -> Strip | None:
     component along the front's largest principal strain); where the front opens, moved across
     the crack (along that strain's direction) onto the damaged elements within 2
     ``adapt.corridor`` of the front's centroid along the line (:func:`_on_the_crack`)."""
+    if adapt.corridor == "auto":
+        raise ValueError("Adaptivity corridor 'auto' is resolved for a run first: adapt.resolved(solver)")
     w = float(adapt.corridor)
     if not w > 0 or solver.alpha is None:
         return None

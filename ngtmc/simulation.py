@@ -193,6 +193,7 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
         if adapt is not None:
             from .adapt import check_solver
             check_solver(self.solver, remesh=adapt.remesh_maxh is not None, adapt=adapt)
+            self.adapt = adapt = adapt.resolved(self.solver)   # corridor "auto" -> its half width, mm
             if adapt.remesh_maxh is not None:
                 from .remesh import Remesher
                 self._remesher = Remesher(scene.mesh, adapt.remesh_maxh)

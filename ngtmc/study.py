@@ -49,9 +49,10 @@ SOLVER_PARAMETERS = {
     "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
                                  "too (Adaptivity.buffer_length), so that a running crack tip stays on the fine mesh "
                                  "for several steps"),
-    "amr_corridor": (0.0, "mm", "with h_crack: half width of a corridor refined along the crack's path ahead of "
-                                "its front at the first refinement after the crack starts to run (the force below 0.95 of its peak; "
-                                "Adaptivity.corridor), so that the crack runs with fewer refinements; about 4 l0 or more; 0: none"),
+    "amr_corridor": ("auto", "mm", "with h_crack: half width of a corridor refined along the crack's path ahead of "
+                                   "its front at the first refinement after the crack starts to run (the force below 0.95 of its peak; "
+                                   "Adaptivity.corridor), so that the crack runs with fewer refinements; 'auto': 4 l0 "
+                                   "(ngtmc.adapt.CORRIDOR_L0) in 2D, none in 3D; 0: none"),
     "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
                               "Adaptivity.h_void); 0: the void is not refined"),
     "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
@@ -145,8 +146,9 @@ def simulation_options(p: dict) -> dict:
         try:
             h_void = float(p.get("amr_h_void", 0.0))
             maxh = float(p.get("amr_remesh_maxh", 0.0))
+            corridor = p.get("amr_corridor", SOLVER_PARAMETERS["amr_corridor"][0])
             out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
-                                      corridor=float(p.get("amr_corridor", 0.0)),
+                                      corridor=corridor if isinstance(corridor, str) else float(corridor),
                                       h_void=h_void if h_void > 0 else None,
                                       size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
                                       history_fraction=float(p.get("amr_history_fraction", 1.0)),

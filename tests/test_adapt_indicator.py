@@ -101,7 +101,7 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     assert c[extra, 0].max() > 0.85
     # nothing without a front, without damage, or with no width
     assert not corridor(s, a, np.zeros_like(front)).any()
-    assert not corridor(s, Adaptivity(h_crack=0.03), front).any()
+    assert not corridor(s, Adaptivity(h_crack=0.03, corridor=0.0), front).any()
     s.alpha.vec.FV().NumPy()[:] = 0.0
     assert not corridor(s, a, front).any()
 
@@ -170,7 +170,61 @@ def test_corridor_waits_for_the_crack_to_run_and_comes_once():
     assert not adapt_corridor.corridor_due(sim.rows, sim.refinements)
     assert adapt_corridor.CORRIDOR_DROP == 0.95
     assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0.1})["adapt"].corridor == 0.1
-    assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == 0.0
+    assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == "auto"
+    assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0})["adapt"].corridor == 0.0
+
+
+def test_the_default_corridor_is_four_l0_in_2d_and_none_in_3d():
+    """Adaptivity(corridor="auto"), the default: a run resolves it to CORRIDOR_L0 = 4 times the
+    fracture regions' mean l0 (area weighted) on a 2D mesh, to 0 in 3D and without a phase
+    field; a number is kept as it is; a string other than "auto" is refused, and the strip of
+    an unresolved "auto" is refused too."""
+    import ngsolve as ngs
+    import ngtmc
+    from ngtmc.adapt import CORRIDOR_L0
+    from ngtmc.solver import Solver
+    from scenes import notched_plate, tension_bar
+    assert Adaptivity(h_crack=0.01).corridor == "auto" and CORRIDOR_L0 == 4.0
+    with pytest.raises(ValueError, match="corridor = 'wide'"):
+        Adaptivity(h_crack=0.01, corridor="wide")
+    scene = notched_plate(maxh=0.2, h_band=0.2, l0=0.05)
+    s = Solver(scene, compile=False)
+    assert Adaptivity(h_crack=0.0125).resolved(s).corridor == pytest.approx(4 * 0.05, rel=1e-12)
+    fixed = Adaptivity(h_crack=0.0125, corridor=0.3)
+    assert fixed.resolved(s) is fixed
+    with pytest.raises(ValueError, match="resolved"):
+        adapt_corridor.strip(s, Adaptivity(h_crack=0.0125), np.ones(s.mesh.ne, dtype=bool))
+    # two fracture regions of l0 1 and 3 mm, of areas 1 and 3 mm^2 (by hand: (1 + 9) / 4 = 2.5 mm)
+    from netgen.geom2d import SplineGeometry
+    geo = SplineGeometry()
+    pts = [geo.AppendPoint(*p) for p in ((0, 0), (1, 0), (4, 0), (4, 1), (1, 1), (0, 1))]
+    for a, b, l, r, bc in ((0, 1, 1, 0, "bottom"), (1, 2, 2, 0, "bottom"), (2, 3, 2, 0, "right"),
+                           (3, 4, 2, 0, "top"), (4, 5, 1, 0, "top"), (5, 0, 1, 0, "left"), (1, 4, 1, 2, "inner")):
+        geo.Append(["line", pts[a], pts[b]], leftdomain=l, rightdomain=r, bc=bc)
+    geo.SetMaterial(1, "a")
+    geo.SetMaterial(2, "b")
+    mesh = ngs.Mesh(geo.GenerateMesh(maxh=0.3))
+    two = ngtmc.Scene(mesh, {"a": ngtmc.Material(1000.0, 0.3, 1e-3, 1.0), "b": ngtmc.Material(1000.0, 0.3, 1e-3, 3.0)},
+                      fracture_regions="a|b", supports=[ngtmc.Support("left", x=True, y=True)],
+                      load=ngtmc.DisplacementLoad("right", "x"))
+    s2 = Solver(two, compile=False)
+    assert Adaptivity(h_crack=0.25).resolved(s2).corridor == pytest.approx(CORRIDOR_L0 * 2.5, rel=1e-12)
+    # without a phase field, and in 3D: none
+    assert Adaptivity(h_crack=0.01).resolved(Solver(tension_bar(fracture=False), compile=False)).corridor == 0.0
+    from netgen.occ import Box, OCCGeometry, Pnt, X
+    box = Box(Pnt(0, 0, 0), Pnt(1, 0.5, 0.5))
+    box.faces.Min(X).name = "left"
+    box.faces.Max(X).name = "right"
+    block = ngtmc.Scene(ngs.Mesh(OCCGeometry(box).GenerateMesh(maxh=0.5)), {"default": ngtmc.Material(1000.0, 0.3, 1e-3, 2.0)},
+                        fracture_regions=".*", supports=[ngtmc.Support("left", x=True, y=True, z=True)],
+                        load=ngtmc.DisplacementLoad("right", "x"))
+    s3 = Solver(block, compile=False)
+    assert s3.mesh.dim == 3 and s3.alpha is not None
+    assert Adaptivity(h_crack=0.1).resolved(s3).corridor == 0.0
+    # a run resolves it
+    sim = ngtmc.Simulation(scene, ngtmc.Schedule([0.0, 0.007]), ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7),
+                           compile=False, adapt=Adaptivity(h_crack=0.0125))
+    assert sim.adapt.corridor == pytest.approx(0.2, rel=1e-12)
 
 
 def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_edges():
