@@ -343,8 +343,19 @@ def _type_name(like) -> str:
 
 def _coerce(value, like, key: str = "value", unit: str = ""):
     """Convert an override to the type of the default ``like``; StudyError naming ``key`` and the
-    expected type if it cannot be (strings from the command line are parsed)."""
+    expected type if it cannot be (strings from the command line are parsed). A default of
+    "auto" takes "auto" (or another word the setting names) or a number (``amr_corridor``)."""
     what = f"{key} expects {_type_name(like)}{f' ({unit})' if unit and unit != '-' else ''}"
+    if like == "auto":
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (str, int, float, np.integer, np.floating)):
+            raise StudyError(f"override {key} = {value!r}: {key} expects 'auto' or a number"
+                             f"{f' ({unit})' if unit and unit != '-' else ''}, got {type(value).__name__}")
+        if isinstance(value, str):
+            try:
+                return float(value)
+            except ValueError:
+                return value
+        return float(value)
     if isinstance(like, str):
         if not isinstance(value, str):
             raise StudyError(f"override {key} = {value!r}: {what}, got {type(value).__name__}")

@@ -453,9 +453,13 @@ def cases(p: dict) -> list[Case]:
         control = ngtmc.AdaptiveStepControl(du_max=float(p["du_max"]), k_u=float(p["k_u"]),
                                             du_min=min(float(p["du_min"]), float(p["du_max"])))
         snaps = [x for x in _tpb.SNAPSHOT_LOADS if x <= stop + 1e-12]   # and the last step, as every case
+        twin = dict(opts)
+        if opts.get("adapt") is not None and opts["adapt"].corridor == "auto":
+            # the slab (3D) resolves the default corridor to none; its 2D twin refines as it does
+            twin["adapt"] = dataclasses.replace(opts["adapt"], corridor=0.0)
         out.append(Case(name="plane_strain_2d", label="2D, plane strain, same mesh in the plane",
                         scene=partial(build_plane_strain_scene, dict(p)), schedule=ngtmc.Schedule.monotonic(stop),
-                        control=control, options=dict(opts), snapshot_loads=snaps, cost=1.0))
+                        control=control, options=twin, snapshot_loads=snaps, cost=1.0))
         out.append(Case(name="slab", label="3D slab, one layer of prisms, u_z held on both faces",
                         scene=partial(build_slab_scene, dict(p)), schedule=ngtmc.Schedule.monotonic(stop),
                         control=control, options=dict(opts), snapshot_loads=snaps, cost=3.0))

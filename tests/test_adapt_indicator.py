@@ -172,6 +172,17 @@ def test_corridor_waits_for_the_crack_to_run_and_comes_once():
     assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0.1})["adapt"].corridor == 0.1
     assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == "auto"
     assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0})["adapt"].corridor == 0.0
+    # from the command line (strings): a number, "auto", or a clear refusal
+    from ngtmc.study import StudyError, study_parameters
+    from ngtmc.studies import three_point_bending as tpb
+    for given, expected in (("0.12", 0.12), ("0", 0.0), ("auto", "auto"), (0.1, 0.1)):
+        _, p = study_parameters(tpb, "quick", {"h_crack": "0.015", "amr_corridor": given})
+        assert simulation_options(p)["adapt"].corridor == expected
+    _, p = study_parameters(tpb, "quick", {"h_crack": "0.015", "amr_corridor": "wide"})
+    with pytest.raises(StudyError, match="corridor = 'wide'"):
+        simulation_options(p)
+    with pytest.raises(StudyError, match="amr_corridor expects 'auto' or a number"):
+        study_parameters(tpb, "quick", {"amr_corridor": True})
 
 
 def test_the_default_corridor_is_four_l0_in_2d_and_none_in_3d():

@@ -37,6 +37,11 @@ def test_the_study_is_registered_and_refuses_bad_parts():
         study.cases(p)
     _, p = study_parameters(study, "quick", {"h_crack": 0.02, "parts": "slab", "slab_thickness": 0.02})
     assert [c.options["adapt"].h_crack for c in study.cases(p)] == [0.02, 0.02]   # the 2D twin and the slab
+    # the default corridor ("auto") is none in 3D, so the slab's 2D twin has none either; a width
+    # given reaches both
+    assert [c.options["adapt"].corridor for c in study.cases(p)] == [0.0, "auto"]
+    _, p = study_parameters(study, "quick", {"h_crack": 0.02, "parts": "slab", "slab_thickness": 0.02, "amr_corridor": 0.1})
+    assert [c.options["adapt"].corridor for c in study.cases(p)] == [0.1, 0.1]
     _, p = study_parameters(study, "quick", {"h_crack": 0.01, "parts": "hemisphere", "amr_remesh_maxh": 0.5})
     with pytest.raises(StudyError, match="remeshing.*2D only"):
         study.cases(p)
