@@ -305,7 +305,7 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
     parameters that the study's code now resolves differently from the recorded values.
     Returns ``(resolution, overrides, p)``.
     """
-    from .study import StudyError, effective_parameters, study_parameters
+    from .study import DEFAULT_CHANGED, StudyError, effective_parameters, study_parameters
     if not meta:
         res, p = study_parameters(mod, resolution, overrides)
         return res, typed_overrides(p, overrides), p
@@ -316,6 +316,16 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
     res = rec_res or resolution
     rec_over = meta.get("overrides") or {}
     res, p = study_parameters(mod, res, rec_over)
+    recorded = {k: v.get("value") for k, v in (meta.get("parameters") or {}).items() if isinstance(v, dict)}
+    # settings whose default changed since: the run goes on with the value it was recorded at (the
+    # old default where its record does not name it; with a hash only, where that hash says so)
+    changed = {k: old for k, old in DEFAULT_CHANGED.items()
+               if k in p and k not in rec_over and k not in (overrides or {})}
+    if recorded:
+        p.update({k: recorded.get(k, old) for k, old in changed.items()})
+    elif (changed and meta.get("parameters_hash") and meta["parameters_hash"] != parameters_hash(p, mod)
+          and meta["parameters_hash"] == parameters_hash({**p, **changed}, mod)):
+        p.update(changed)
     rec_typed = typed_overrides(p, rec_over)
     if overrides:
         _, p_given = study_parameters(mod, res, overrides)
@@ -324,7 +334,6 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
             raise StudyError(f"cannot resume {out} with other overrides than it was started with; differences "
                              f"(key: recorded -> given): {'; '.join(diff)}. Resume without --set to continue with "
                              "the recorded overrides, or start a new run in another folder")
-    recorded = {k: v.get("value") for k, v in (meta.get("parameters") or {}).items() if isinstance(v, dict)}
     if recorded:
         diff = _differences(effective_parameters(recorded, mod), effective_parameters(p, mod))
         if diff:

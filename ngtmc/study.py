@@ -87,6 +87,13 @@ ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_reme
                     "amr_history_fraction": 1.0, "amr_buffer": 1}
 
 
+#: Settings whose default changed after runs were recorded, with the default those runs had: a
+#: resumed run whose record does not name the setting, or names it at that old default, goes on
+#: with it (:func:`ngtmc.runfiles.resume_parameters`), not with the new default. amr_corridor:
+#: 0 (none) until 2026-12-06, "auto" (4 l0 in 2D) since.
+DEFAULT_CHANGED = {"amr_corridor": 0.0}
+
+
 def added_at_default(mod=None) -> dict:
     """:data:`ADDED_AT_DEFAULT` and, for the study module ``mod``, the parameters its
     ``ADDED_AT_DEFAULT`` names, at their defaults in its PARAMETERS ({name: value})."""

@@ -202,6 +202,34 @@ def test_refused_run_leaves_no_folder(tmp_path):
     assert json.loads((out / "metadata.json").read_text())["status"] == "completed"
 
 
+def test_a_refined_run_recorded_before_the_default_corridor_resumes_without_one(tmp_path):
+    """amr_corridor's default changed from 0 (none) to "auto" (4 l0) on 2026-12-06
+    (ngtmc.study.DEFAULT_CHANGED): a refined run recorded before, with amr_corridor at 0 or not
+    named at all, resumes with no corridor; one recorded after resumes with "auto"; one recorded
+    with a width given resumes with it."""
+    from ngtmc.runfiles import resume_parameters, run_description
+    from ngtmc.study import DEFAULT_CHANGED, load_study, simulation_options, study_parameters
+    assert DEFAULT_CHANGED == {"amr_corridor": 0.0}
+    mod = load_study("three_point_bending")
+    res, p = study_parameters(mod, "quick", {"h_crack": 0.015})
+    assert p["amr_corridor"] == "auto"
+    old = dict(p, amr_corridor=0.0)
+    meta = run_description(mod, old, res, {"h_crack": 0.015})
+    got = resume_parameters(meta, mod, None, None, tmp_path)[2]
+    assert got["amr_corridor"] == 0.0 and simulation_options(got)["adapt"].corridor == 0.0
+    meta["parameters"].pop("amr_corridor")     # recorded before the setting existed
+    assert resume_parameters(meta, mod, None, None, tmp_path)[2]["amr_corridor"] == 0.0
+    meta.pop("parameters")                      # only its hash recorded: the hash decides
+    assert resume_parameters(meta, mod, None, None, tmp_path)[2]["amr_corridor"] == 0.0
+    meta_new = run_description(mod, p, res, {"h_crack": 0.015})
+    assert resume_parameters(meta_new, mod, None, None, tmp_path)[2]["amr_corridor"] == "auto"
+    meta_new.pop("parameters")
+    assert resume_parameters(meta_new, mod, None, None, tmp_path)[2]["amr_corridor"] == "auto"
+    _, p_w = study_parameters(mod, "quick", {"h_crack": 0.015, "amr_corridor": 0.1})
+    meta_w = run_description(mod, p_w, res, {"h_crack": 0.015, "amr_corridor": 0.1})
+    assert resume_parameters(meta_w, mod, None, None, tmp_path)[2]["amr_corridor"] == 0.1
+
+
 def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     """The adaptivity settings (h_crack, amr_lookahead, amr_h_void) have no effect while h_crack is
     0: they are not in the parameter hash, and a run recorded before they existed resumes; a run
