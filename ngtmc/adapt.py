@@ -73,9 +73,10 @@ __all__ = ["Adaptivity", "CORRIDOR_L0", "mark", "targets", "refine", "replay", "
 #: iterations, its crack 0.74 h from the uniform mesh's on average against 1.08 h; the quick
 #: L-panel (4.75 mm) 114 s against 127 s, the same steps and crack (0.68 h from the band's); the
 #: quick three-point bending (0.12 mm) 83 steps and 445 iterations against 115 and 935; at the
-#: paper's resolution (0.12 mm) the whole curve in 14, 9.6 and 14.0 % less time than the
-#: pre-refined band run (three pairs; wider strips were slower than it). 3.3 l0 (0.1 mm) was too narrow there: the tail's damage (alpha > 0.1) spreads over
-#: 0.21 mm, and refinements outside the strip, each with its settle, put the run behind.
+#: paper's resolution (0.12 mm) the whole curve in 14, 9.6, 14.0 and 14.0 % less time than the
+#: pre-refined band run (four pairs; wider strips were slower than it). 3.3 l0 (0.1 mm) was too
+#: narrow there: the tail's damage (alpha > 0.1) spreads over 0.21 mm, and refinements outside the
+#: strip, each with its settle, put the run behind.
 CORRIDOR_L0 = 4.0
 
 
