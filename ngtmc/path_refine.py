@@ -22,8 +22,9 @@ class PathAcrossRefinement:
         """After a refinement of the mesh within a step (:mod:`ngtmc.adapt`, the coupled Newton
         having followed it): ``before`` is the state before the step (the last accepted one)
         transferred to the refined mesh, ``previous`` the predictor's
-        :meth:`~ngtmc.path_predictor.SecantPredictor.states` transferred with it. The secant predictor goes on through those two states (without ``previous`` it
-        restarts from ``before``), and the dissipation of the last accepted state is taken again on
+        :meth:`~ngtmc.path_predictor.SecantPredictor.states` transferred with it. The secant
+        predictor goes on through those two states (without ``previous`` it restarts from
+        ``before``), and the dissipation of the last accepted state is taken again on
         the refined mesh (the same P1 field, so the same value to round-off). Where ``before``
         was settled below its load on the new mesh (:func:`ngtmc.carried_state.settle`), the run
         goes on from that load: the simulation's pseudo-time and the last load follow it."""
