@@ -74,6 +74,16 @@ class BoundaryConditions:
                 for c in comps:
                     mask |= self._boundary_dofs(b, c)
             rec["mask"] = mask & self._dir_np
+            # the dofs the load moves (a DisplacementLoad's held tangential components excluded)
+            if isinstance(ld, DisplacementLoad):
+                moving = np.zeros(self.fes_u.ndof, dtype=bool)
+                if isinstance(b, Point):
+                    moving[self._vertex_dof(vx, ld.component)] = True
+                else:
+                    moving |= self._boundary_dofs(b, ld.component)
+                rec["moving"] = moving & self._dir_np
+            else:
+                rec["moving"] = rec["mask"]
             gf = ngs.GridFunction(self.fes_u)
             if isinstance(ld, DisplacementLoad):
                 if isinstance(b, Point):
@@ -90,6 +100,12 @@ class BoundaryConditions:
         if self._tractions:
             self._f_ext = self.u.vec.CreateVector()
             self._f_ext.FV().NumPy()[:] = sum(r["f"] for r in self._loads if "f" in r)
+        #: the dofs that the displacement loads move: their residual is the reaction that sets the
+        #: equilibrium scale of the Newton solvers (:meth:`equilibrium_scale`)
+        self._moved_np = np.zeros(self.fes_u.ndof, dtype=bool)
+        for rec in self._loads:
+            if "moving" in rec:
+                self._moved_np |= rec["moving"]
 
     def _set_field(self, gf, rec, cf):
         """Write the vector CF ``cf`` into the prescribed components of ``gf`` on the load's boundary or vertex."""
@@ -216,6 +232,27 @@ class BoundaryConditions:
                 out[rec["name"]] = self.load * rec["total"] * self.thickness
             else:
                 out[rec["name"]] = self.ranks.dot_array(self._r, self.reaction_weight(rec["name"])) * self.thickness
+        return out
+
+    def residual_norm(self, after_reactions: bool = False) -> float:
+        """Norm of the displacement equation's residual on the free dofs at the current state, N
+        per unit thickness in 2D: the equilibrium that the Newton tolerance states
+        (``NewtonOptions``). ``after_reactions``: reuse the residual that :meth:`reactions` has
+        just formed for the current state."""
+        if not after_reactions:
+            self._lam_ext = self.load
+            self.a_u.Apply(self.u.vec, self._r)
+        return self.ranks.masked_norm(self._r, self._free_np)
+
+    def reaction_vector(self) -> np.ndarray:
+        """The nodal reactions of the current state: the residual of the displacement equation on
+        the Dirichlet dofs (supports, loads, vertex conditions), zero on the free dofs, N (for the
+        scene thickness in 2D), one entry per displacement dof of ``fes_u`` (NGSolve's order: all
+        x components, then y (then z) for the vertex dofs' VectorH1 layout). A copy."""
+        self._lam_ext = self.load
+        self.a_u.Apply(self.u.vec, self._r)
+        out = self._r.FV().NumPy().copy() * self.thickness
+        out[self._free_np] = 0.0
         return out
 
     def load_displacements(self) -> dict:

@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from .displacement_newton import equilibrium_scale
 from .solver import NewtonResult
 
 __all__ = ["Iteration"]
@@ -66,11 +67,14 @@ class Iteration:
         self.free_ux[:nu] = free_u
         self.dir_ux = np.zeros(self.xN.size, dtype=bool)
         self.dir_ux[:nu] = dir_u
+        # the dofs the displacement loads move: their reaction is the equilibrium scale
+        self.moved_ux = np.zeros(self.xN.size, dtype=bool)
+        self.moved_ux[:nu] = s._moved_np
         self.solve_time = self.assembly_time = 0.0
         self.r_ref = 0.0
         self.tol_a = n.alpha_tol * n.alpha_residual_scale
         self.res_u = math.inf
-        self.res_a = self.g = self.reac = 0.0
+        self.res_a = self.g = self.reac = self.scale = 0.0
         self.lifted = False
         self.merits = []
         self.relaxed = False
@@ -142,11 +146,11 @@ class Iteration:
         their scales (:mod:`ngtmc.coupled`)."""
         n = self.n
         fr = self.s.floor_rtol   # one setting for both Newton solvers (Solver.floor_rtol)
-        if self.lifted or not fr or not n._converged(self.res_u, self.res_a, self.g, self.reac, self.r_ref, fr,
+        if self.lifted or not fr or not n._converged(self.res_u, self.res_a, self.g, self.scale, fr,
                                                      fr / n.alpha_tol * self.tol_a, self.scale_g, g_rtol=fr):
             return None
         n.floor_accepts += 1
-        n.floor_worst = max(n.floor_worst, self.res_u / max(self.reac, self.r_ref))
+        n.floor_worst = max(n.floor_worst, self.res_u / max(equilibrium_scale(self.scale), 1e-300))
         return self.accept(it, held)
 
     def stuck(self, it, held, message, done_iterations=None):
@@ -295,6 +299,7 @@ class Iteration:
             self.res_u, self.res_a, held = self.split(xN, rc)
             self.g = g = self.constraint(xN)
             self.reac = reac = ranks.masked_norm(rc, self.dir_ux)
+            self.scale = ranks.masked_norm(rc, self.moved_ux)
             if C._DEBUG:
                 print(f"    gmres {n.lin.gmres_iterations[-2:]}", flush=True)
                 print(f"    [{time.perf_counter() - self.t_start:7.1f}s] coupled it {it} lam {lam:.8g} res_u {self.res_u:.3e} (ref {max(reac, self.r_ref):.3e}) "
@@ -303,7 +308,7 @@ class Iteration:
             if not lifted:
                 if self.r_ref == 0.0:
                     self.r_ref = self.res_u
-                if n._converged(self.res_u, self.res_a, g, reac, self.r_ref, n.rtol, self.tol_a, self.scale_g):
+                if n._converged(self.res_u, self.res_a, g, self.scale, n.rtol, self.tol_a, self.scale_g):
                     return self.accept(it - 1, held)
             scale_u = max(reac, self.r_ref, s.newton.atol)
             merit0 = self.merit_of(self.res_u, self.res_a, g, scale_u)

@@ -19,6 +19,7 @@ import numpy as np
 import ngsolve as ngs
 
 __all__ = ["DisplacementNewton", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
+           "equilibrium_scale", "meets",
            "lifted_direction", "secant_displacement", "SECANT_DAMPING", "SECANT_MAX_RATIO"]
 
 #: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
@@ -26,22 +27,18 @@ DISPLACEMENT_RTOL = 1e-8
 
 #: Relative residual at which an iterate is accepted when the Newton direction no longer reduces
 #: the residual (line search failed or the iteration stalled), instead of the solver's rtol
-#: (1e-8). Measured at the paper's resolution of the three-point bending (2026-11-25): deep in the
-#: crack run the correction is dominated by a near-singular mode, the horizontal motion of a
-#: vertex of the void layer squeezed under the indenter (the Hessian regulariser acts on the
-#: quadratic part of the order-2 field only, so vertex motion is not penalised): a correction of
-#: 1.3e-3 mm for a residual of 5.6e-7 N, and the residual along it is quadratic already at 1e-4
-#: of the step, so no step length reduces it. The iterate there is converged to 2e-8 of the
-#: reaction. In later states of the same run the floor was 1.2e-6 and 1.4e-6 of the reaction
-#: (stalled solves at 21 N/mm in the crack run and at 0.0903 mm before the peak), hence 1e-5.
-#: The count and the worst relative residual are :attr:`CoupledNewton.floor_accepts` and
-#: :attr:`CoupledNewton.floor_worst`.
-#: The displacement Newton accepts at the same floor where its residual stops falling (less than
-#: half in an iteration) or its line search fails (``Solver.floor_accepts``). Measured at the
-#: paper's resolution of the L-panel (2026-12-02): 80 mm into the crack run, from the last accepted
-#: state, the u solve fell from 2.9e-2 N to 3.9e-5 N in 5 iterations and then crept to 3.1e-5 N in 20
-#: more, against a tolerance of 1.9e-5 N (1e-8 of the reaction scale), at every load increment from 0
-#: to 1e-6 mm: every step failed, and the run failed at du_min.
+#: (1e-8): the default of ``NewtonOptions.floor_rtol`` (None refuses such iterates: the attempt
+#: fails and the step is cut back). Relative to :func:`equilibrium_scale`, the reaction of the
+#: iterate itself, never a residual of the step, so that a large step cannot loosen it.
+#: Why a floor at all: deep in the crack run of the paper three-point bending the correction is
+#: dominated by a near-singular mode, the horizontal motion of a vertex of the void layer squeezed
+#: under the indenter (the Hessian regulariser acts on the quadratic part of the order-2 field
+#: only, so vertex motion is not penalised): a correction of 1.3e-3 mm for a residual of 5.6e-7 N,
+#: and the residual along it is quadratic already at 1e-4 of the step, so no step length reduces
+#: it; the floors met there were 2e-8 to 1.4e-6 of the reaction, hence 1e-5. On the paper L-panel,
+#: 80 mm into the crack run, the u solve crept from 3.9e-5 N to 3.1e-5 N in 20 iterations against
+#: a tolerance of 1.9e-5 N. Every acceptance is counted per step in the history column
+#: ``floor_accepts`` and shown by the report.
 FLOOR_RTOL = 1e-5
 
 
@@ -55,7 +52,18 @@ class NewtonOptions:
     the coupled Newton of the monolithic schemes); atol: absolute residual norm, N
     (None: 1e-12 E_max L^(d-1), L the diagonal of the mesh's bounding box); armijo: sufficient
     decrease constant; max_line_search: halvings of the step length before giving up;
-    linear_solver: "sparsecholesky" (symmetric tangents, fastest) or "umfpack".
+    linear_solver: "sparsecholesky" (symmetric tangents, fastest) or "umfpack";
+    floor_rtol: where the residual stops falling (the Newton direction no longer reduces it), the
+    iterate is accepted if its residual is below floor_rtol times the reaction of that iterate
+    (FLOOR_RTOL, 1e-5, the default; a round-off floor measured on the paper's studies) instead of
+    rtol; None refuses such iterates (the attempt fails and the step is cut back). Each
+    acceptance is counted in the history column ``floor_accepts`` of its step. Both Newton
+    solvers (displacement and coupled) use it.
+
+    The tolerance an accepted state meets: residual norm on the free dofs (N) <= rtol x
+    (the iterate's reaction norm, or the applied tractions' where larger:
+    :func:`equilibrium_scale`) + atol, with floor_rtol in place of rtol in the steps whose
+    ``floor_accepts`` is not 0. The history column ``residual`` records it for every step.
     """
 
     max_iterations: int = 25
@@ -64,14 +72,20 @@ class NewtonOptions:
     armijo: float = 1e-4
     max_line_search: int = 12
     linear_solver: str = "sparsecholesky"
+    floor_rtol: float | None = FLOOR_RTOL
 
     def __post_init__(self):
         if self.linear_solver not in ("sparsecholesky", "umfpack", "pardiso"):
             raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
         if int(self.max_iterations) < 1:
             raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
-        if self.rtol is not None and not (0 < self.rtol < 1):
-            raise ValueError(f"rtol = {self.rtol!r} is outside the allowed range (0, 1)")
+        for name in ("rtol", "floor_rtol"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v < 1)):
+                raise ValueError(f"NewtonOptions {name} = {v!r} must be a number in (0, 1) or None")
+        if self.atol is not None and (isinstance(self.atol, bool) or not isinstance(self.atol, (int, float))
+                                      or not self.atol >= 0):
+            raise ValueError(f"NewtonOptions atol = {self.atol!r} must be a number >= 0 (N) or None")
 
 
 @dataclass
@@ -101,6 +115,21 @@ def residual_split(r, u, target: np.ndarray, free: np.ndarray, dirichlet: np.nda
         rN = r.FV().NumPy()
         return rem, lifted, float(np.linalg.norm(rN[free])), float(np.linalg.norm(rN[dirichlet]))
     return rem, ranks.any(lifted), ranks.masked_norm(r, free), ranks.masked_norm(r, dirichlet)
+
+
+def equilibrium_scale(reac: float, external: float = 0.0) -> float:
+    """The force scale (N) that an iterate's residual is measured against: the norm of its reaction
+    ``reac`` (the residual on the dofs the displacement loads move), or of the applied tractions
+    ``external`` where that is larger. Both belong to the iterate, so the scale cannot inflate with a large step (the
+    residual of a step's first iterate, used before, did: a rigid rotation by 90 degrees in one
+    step was accepted with a force of 1.2e-7 N and a body 4e-7 mm off the rotation). The one owner
+    of this scale: the displacement Newton and the coupled Newton both use it."""
+    return max(float(reac), float(external))
+
+
+def meets(res: float, scale: float, rtol: float, atol: float) -> bool:
+    """True where the residual norm ``res`` (N) meets ``rtol`` x ``scale`` + ``atol``."""
+    return res <= rtol * scale + atol
 
 
 def lifted_direction(mat, inv, r, rem: np.ndarray, dirichlet: np.ndarray, w, tmp, du):
@@ -178,6 +207,17 @@ class DisplacementNewton:
         MPI ranks NGSolve's "masterinverse" (the matrix gathered and factorized on rank 0)."""
         return "masterinverse" if self.ranks.parallel else kind
 
+    def equilibrium_scale(self, r, load: float) -> float:
+        """:func:`equilibrium_scale` of this solver's iterate, whose residual is ``r`` (an NGSolve
+        vector, N), at the load ``load`` (mm): the norm of the reactions on the dofs that the
+        displacement loads move, and of the tractions applied at ``load`` (force control). The
+        supports' reactions are left out: a plane-strain slab's held u_z carry reactions that its
+        2D twin has no dofs for, and the two would converge differently."""
+        external = 0.0
+        if self._tractions:
+            external = abs(load) * self.ranks.masked_norm(self._f_ext, self._free_np)
+        return equilibrium_scale(self.ranks.masked_norm(r, self._moved_np), external)
+
     @property
     def _ranks_or_none(self):
         return self.ranks if self.ranks.parallel else None
@@ -219,15 +259,13 @@ class DisplacementNewton:
             self._a_shift = self._energy_form(uT, extra=extra)
         return self._a_shift
 
-    def solve_displacement(self, load: float, predicted: bool = False) -> NewtonResult:
+    def solve_displacement(self, load: float) -> NewtonResult:
         """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed.
 
-        ``predicted``: u holds a predictor that already carries the boundary values of ``load``
-        (:func:`secant_displacement`), not an equilibrium: its residual does not set the
-        reference scale of the relative tolerance, the residual after the first Newton step
-        does, as after a first step that carries the boundary increment. (A poor predictor's
-        large residual made the tolerance loose: a rigid rotation by 90 degrees ended with a
-        force of 1.4e-8 of a 1 % stretch's, against 1e-9 without the predictor.)
+        Converged where the residual on the free dofs meets rtol (``displacement_rtol``) times
+        the iterate's own force scale (:func:`equilibrium_scale`: its reaction, or the applied
+        tractions) plus atol; no residual of the step (a first iterate's, a predictor's) enters
+        the tolerance, so that a large step cannot loosen it.
 
         The Dirichlet increment is carried by the Newton increment (never written into u
         directly, which would invert boundary elements). Steps are accepted only if the energy
@@ -238,8 +276,9 @@ class DisplacementNewton:
         the mass matrix, mu raised by tenfold until the direction descends. Where the residual
         stops falling (by less than half in an iteration, also the last one) or the line search
         fails, the iterate is accepted if its residual is below ``floor_rtol``
-        (FLOOR_RTOL; None: never) of the reaction scale (counted in ``floor_accepts``). On
-        failure u is left at the last iterate; the caller restores the state."""
+        (``NewtonOptions.floor_rtol``; None: never) of the same scale (counted in
+        ``floor_accepts``, the worst relative residual in ``floor_worst``). On failure u is left
+        at the last iterate; the caller restores the state."""
         opt = self.newton
         rtol = self.displacement_rtol
         u = self.u.vec
@@ -250,7 +289,6 @@ class DisplacementNewton:
         solve_time = 0.0
         assembly_time = 0.0
         shifted = 0
-        r_ref = 0.0
         res = math.inf
         reac = 0.0
         res_prev = math.inf
@@ -260,9 +298,11 @@ class DisplacementNewton:
 
         def at_floor(it):
             """The residual no longer falls: the iterate accepted if it is below the floor, else None."""
-            if not floor or lifted or not res <= floor * max(reac, r_ref) + opt.atol:
+            scale = self.equilibrium_scale(r, load)
+            if not floor or lifted or not meets(res, scale, floor, opt.atol):
                 return None
             self.floor_accepts += 1
+            self.floor_worst = max(self.floor_worst, res / max(scale, 1e-300))
             self.load = load
             self._r_valid = False
             return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
@@ -271,12 +311,10 @@ class DisplacementNewton:
             """After the residual of the iterate of ``it`` iterations: the result if it converged,
             or if the residual fell by less than half since the last one and sits at the floor;
             else None."""
-            nonlocal r_ref, res_prev
+            nonlocal res_prev
             if lifted:
                 return None
-            if r_ref == 0.0 and not (predicted and it == 0):
-                r_ref = res
-            if res <= rtol * max(reac, r_ref) + opt.atol:
+            if meets(res, self.equilibrium_scale(r, load), rtol, opt.atol):
                 self.load = load
                 self._r_valid = True
                 return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
@@ -292,7 +330,7 @@ class DisplacementNewton:
             if not np.isfinite(res):
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
             if _DEBUG:
-                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} r_ref {r_ref:.3e} tol {rtol * max(reac, r_ref) + opt.atol:.3e}")
+                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} tol {rtol * self.equilibrium_scale(r, load) + opt.atol:.3e}")
             done = settled(it - 1)
             if done is not None:
                 return done

@@ -34,7 +34,7 @@ PATH_STEPS = 50
 
 
 def alpha_u_passes(s, load: float, max_passes: int = 1, info: dict | None = None, staggered_tol: float = 0.0,
-                   newton_every: int = 0, coupled_newton=None, predicted: bool = False):
+                   newton_every: int = 0, coupled_newton=None):
     """alpha-u-H passes of solver ``s`` (:class:`ngtmc.solver.Solver`) at a fixed ``load`` (mm)
     (Sect. 4 of MODEL.md): alpha from the latest history, Newton for u, trial history. The one
     copy of the step's sequence: the runs' schemes and the adjoint's replays call it.
@@ -43,8 +43,8 @@ def alpha_u_passes(s, load: float, max_passes: int = 1, info: dict | None = None
     ``staggered_tol`` (max norm), the converged staggered scheme. ``newton_every`` > 0 calls
     ``coupled_newton(load, info)`` from the current iterate after that many passes, then after
     twice as many passes each time, and stops when it converges (the fallback of the monolithic
-    scheme). ``predicted``: u holds the secant predictor
-    (:meth:`StepSchemes._predict_displacement`) for the first pass's Newton. The history is not
+    scheme). u may hold a predictor (:meth:`StepSchemes._predict_displacement`) for the first
+    pass's Newton. The history is not
     committed: ``info["H_trial"]`` holds the trial history for ``s.update_history``. Returns
     (ok, info dict)."""
     info = info if info is not None else {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0}
@@ -69,7 +69,7 @@ def alpha_u_passes(s, load: float, max_passes: int = 1, info: dict | None = None
                 s.alpha.vec.FV().NumPy()[:] = alpha_prev_pass
                 passes -= 1
                 break
-        res = s.solve_displacement(load, predicted=predicted and passes == 1)
+        res = s.solve_displacement(load)
         _add(info, res)
         if not res.converged:
             return fail(res.message)
@@ -196,8 +196,8 @@ class StepSchemes:
             return self._path.attempt(t_new)
         if self.coupled is not None:
             return self._attempt_monolithic(load)
-        predicted = self._predict_displacement(load)
-        return self._passes(load, 1 if self.scheme == "single-pass" else self.max_staggered, predicted=predicted)
+        self._predict_displacement(load)
+        return self._passes(load, 1 if self.scheme == "single-pass" else self.max_staggered)
 
     def _predict_displacement(self, load: float) -> bool:
         """Start the displacement Newton of the step to ``load`` (mm) from the secant through the
@@ -222,12 +222,10 @@ class StepSchemes:
         if self._path is None and self.secant_predictor:
             self._u_before = (np.asarray(before["u"], dtype=float), float(before["load"]), self.solver.mesh_generation)
 
-    def _passes(self, load: float, max_passes: int, info: dict | None = None, newton_every: int = 0,
-                predicted: bool = False):
+    def _passes(self, load: float, max_passes: int, info: dict | None = None, newton_every: int = 0):
         """:func:`alpha_u_passes` with this run's ``staggered_tol`` and coupled Newton."""
         return alpha_u_passes(self.solver, load, max_passes, info, staggered_tol=self.staggered_tol,
-                              newton_every=newton_every, coupled_newton=self._coupled_newton,
-                              predicted=predicted)
+                              newton_every=newton_every, coupled_newton=self._coupled_newton)
 
     def _coupled_newton(self, load: float, info: dict, alpha_upper=None):
         """Coupled Newton from the current (u, alpha); on failure the iterate is restored."""
@@ -269,7 +267,8 @@ class StepSchemes:
         s = self.solver
         saved = s.get_state() if self.fallback == "single-pass" else None
         info = attempt_info()
-        res = s.solve_displacement(load, predicted=self._predict_displacement(load))
+        self._predict_displacement(load)
+        res = s.solve_displacement(load)
         _add(info, res)
         if not res.converged:
             info["message"] = res.message

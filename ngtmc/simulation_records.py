@@ -30,6 +30,9 @@ class RunRecords:
         t0 = time.perf_counter()
         en = s.energies(wf)
         forces = s.reactions(reuse_residual=self.step > 0)
+        floors = self._floor_total()
+        seen = getattr(self, "_floors_recorded", None)
+        self._floors_recorded = floors
         row = {
             "step": self.step,
             "load": s.load,
@@ -48,6 +51,8 @@ class RunRecords:
             "wall_time": self._elapsed(),
             "solve_time": info["solve_time"],
             "assembly_time": info["assembly_time"],
+            "residual": s.residual_norm(after_reactions=True) * s.thickness,
+            "floor_accepts": 0 if seen is None else floors - seen,
         }
         if self.adapt is not None:
             row["dofs"] = s.fes_u.ndof + (s.fes_a.ndof if s.fes_a is not None else 0)
@@ -58,6 +63,11 @@ class RunRecords:
         self.rows.append(row)
         s.timings["record"] += time.perf_counter() - t0
         return row
+
+    def _floor_total(self) -> int:
+        """Solves accepted at the residual floor so far (displacement and coupled Newton)."""
+        c = getattr(self, "coupled", None)
+        return int(getattr(self.solver, "floor_accepts", 0)) + (int(c.floor_accepts) if c is not None else 0)
 
     @property
     def history(self) -> pd.DataFrame:

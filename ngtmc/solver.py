@@ -30,7 +30,7 @@ from .boundary_conditions import BoundaryConditions
 from .displacement_energy import DisplacementEnergy, _regex
 from .energy_forms import _ExternalWork
 from .phase_field import PhaseFieldHistory
-from .displacement_newton import DISPLACEMENT_RTOL, FLOOR_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
+from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .distributed import Ranks
 from .discretisation import lower_order_outside
 from .conditions import Point, Support, Traction
@@ -201,8 +201,10 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         #: relative residual at which the displacement Newton and the coupled Newton accept an
         #: iterate whose residual no longer falls (None: never; the adjoint's recordings), and the
         #: displacement solves so accepted
-        self.floor_rtol = FLOOR_RTOL
+        self.floor_rtol = self.newton.floor_rtol
         self.floor_accepts = 0
+        #: the largest relative residual (residual / equilibrium scale) of a floor acceptance
+        self.floor_worst = 0.0
         #: line searches of the displacement Newton whose energy could not resolve the step
         #: (round-off, ngtmc.displacement_newton.NOISE_FRACTION), so that its residual decided
         self.energy_noise_switches = 0
