@@ -13,7 +13,7 @@ import ngsolve as ngs
 
 from . import cxx_cache
 
-__all__ = ["real_compile", "rules", "lower_order_outside", "bilinear_form"]
+__all__ = ["real_compile", "rules", "term_rules", "RULE_EXACTNESS", "lower_order_outside", "bilinear_form"]
 
 _REAL_COMPILE_FAILED = []
 
@@ -44,10 +44,76 @@ def real_compile(cf):
         return None
 
 
-def rules(mesh, order: int) -> dict:
-    """Integration rules of the given order for every element type of the mesh's dimension."""
-    types = (ngs.TRIG, ngs.QUAD) if mesh.dim == 2 else (ngs.TET, ngs.HEX, ngs.PRISM, ngs.PYRAMID)
-    return {et: ngs.IntegrationRule(et, order) for et in types}
+def element_types(mesh) -> tuple:
+    """The volume element types of the mesh's dimension (NGSolve's ``ET``)."""
+    return (ngs.TRIG, ngs.QUAD) if mesh.dim == 2 else (ngs.TET, ngs.HEX, ngs.PRISM, ngs.PYRAMID)
+
+
+def rules(mesh, order) -> dict:
+    """Integration rules for every element type of the mesh's dimension: of the given order, or of
+    the order per element type where ``order`` is a dict (ET -> order)."""
+    return {et: ngs.IntegrationRule(et, order[et] if isinstance(order, dict) else order)
+            for et in element_types(mesh)}
+
+
+_SIMPLICES = (ngs.TRIG, ngs.TET)
+
+#: On which elements the rule of each :func:`term_rules` term is exact ("exact") and where it is
+#: only converged ("converged": a rational or non-polynomial integrand, checked against a rule of
+#: much higher order in tests/test_verification.py). Straight means affine: a straight simplex,
+#: a parallelogram or parallelepiped, a prism with parallel triangles; "curved" is a mesh with
+#: ``mesh.Curve(k)``, k >= 2, and any non-affine quadrilateral or hexahedron.
+RULE_EXACTNESS = {
+    "regularisation": "exact on straight (affine) triangles, tetrahedra, quadrilaterals, hexahedra and prisms "
+                      "(order 2(p - 2) on simplices, where the Hessian of a degree-p field has degree p - 2; "
+                      "order 2p on tensor-product and prism elements, where it has degree p in each "
+                      "variable); converged on non-affine quadrilaterals and hexahedra (order 2p: 2e-8 relative on "
+                      "a skewed square, p = 2), on curved elements (order 2p + 2: 2e-9 on a curved triangle mesh, "
+                      "3e-5 on a curved quad-dominated one) and on pyramids (order 2p + 2, rational shape functions)",
+    "elastic_p1": "exact on straight simplices for the undegraded energy (one point: F is constant; g(alpha) "
+                  "of a fracture region varies over the element and is sampled there); straight prisms: the "
+                  "triangle's centroid times two Gauss points along the axis (exact where F is constant through "
+                  "the thickness, as in a plane-strain slab); converged on quadrilaterals, "
+                  "hexahedra, pyramids and curved elements (order 2, the full rule of the history "
+                  "points, 2e-5 to 6e-4 relative on the skewed and curved meshes of the tests: one point "
+                  "there would leave the hourglass modes of a quadrilateral without stiffness)",
+    "elastic": "converged on every element (order 2p, the history and J-guard points; the hyperelastic "
+               "density is not a polynomial)",
+}
+
+
+def _prism_centroid_line():
+    """The rule of an order-1 prism: the triangle's centroid times two Gauss points along the
+    prism's axis. F of an order-1 prism is linear along the axis and, in a plane-strain slab
+    (:func:`ngtmc.extrude`, u_z held), constant: there it is the triangle's one point, so the slab
+    reproduces its 2D twin; the rank is full (no zero-energy mode)."""
+    import math
+    g = 0.5 / math.sqrt(3.0)
+    return ngs.IntegrationRule([(1 / 3, 1 / 3, 0.5 - g), (1 / 3, 1 / 3, 0.5 + g)], [0.25, 0.25])
+
+
+def term_rules(mesh, term: str, p: int) -> dict:
+    """Integration rules (ET -> rule) of the displacement energy term ``term`` for displacement
+    order ``p`` on ``mesh``: "regularisation" (the Hessian regulariser) or "elastic_p1" (an
+    elastic term on order-1 elements); where each is exact: :data:`RULE_EXACTNESS`. The one owner
+    of these choices; :meth:`ngtmc.solver.Solver.energy_measure` picks the term.
+
+    A rule chosen for speed (one point on a straight triangle, where the Hessian of a P2 field is
+    constant) is only used where it is exact: on a quadrilateral (netgen's ``quad_dominated``) the
+    one-point rule moved the contact corner of a self-contact scene by 15 %."""
+    curved = mesh.GetCurveOrder() > 1
+    if term == "regularisation":
+        orders = {et: 2 * p + 2 if curved else (max(2 * p - 4, 0) if et in _SIMPLICES else 2 * p)
+                  for et in element_types(mesh)}
+        if ngs.PYRAMID in orders:
+            orders[ngs.PYRAMID] = 2 * p + 2
+        return rules(mesh, orders)
+    if term == "elastic_p1":
+        out = rules(mesh, {et: 0 if (et in _SIMPLICES and not curved) else 2 for et in element_types(mesh)})
+        if mesh.dim == 3 and not curved:
+            out[ngs.PRISM] = _prism_centroid_line()
+        return out
+    raise ValueError(f"term_rules: unknown term {term!r} (one of 'regularisation', 'elastic_p1')")
 
 
 def bilinear_form(fes, **flags):

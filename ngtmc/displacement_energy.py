@@ -17,7 +17,7 @@ import ngsolve as ngs
 from . import contact_regularisation as creg
 from . import fracture
 from . import splits
-from .discretisation import bilinear_form, real_compile, rules
+from .discretisation import bilinear_form, real_compile, term_rules
 from .energy_forms import _QuadraticPlus, merged_terms
 from .materials import deformation_gradient, psi_dev, psi_vol
 from .scene import _names
@@ -100,15 +100,17 @@ class DisplacementEnergy:
         * Elastic terms on order-1 elements (a scene without regulariser, or the elements outside
           the regulariser's regions when the order varies per element): the rule of the history
           (order 2, 3 points on a triangle) where some elements border order-2 ones or carry
-          the history, else one point (F is constant per element).
-        * The Hessian regulariser: order 2p - 4 (exact for p = 2 on straight elements; NGSolve's
-          default)."""
+          the history, else :func:`~ngtmc.discretisation.term_rules` "elastic_p1" (one point on
+          a straight simplex, where F is constant; the full rule elsewhere).
+        * The Hessian regulariser: :func:`~ngtmc.discretisation.term_rules` "regularisation"
+          (exact on every straight element type; where exact:
+          :data:`~ngtmc.discretisation.RULE_EXACTNESS`)."""
         p = self.order
         meas = functools.partial(ngs.dx, definedon=self.mesh.Materials(regions))
         if name == "regularisation":
-            return meas(intrules=rules(self.mesh, max(2 * p - 4, 0)))
+            return meas(intrules=term_rules(self.mesh, "regularisation", p))
         if p == 1:
-            return meas(intrules=rules(self.mesh, 0))
+            return meas(intrules=term_rules(self.mesh, "elastic_p1", p))
         if regions == self._high_re or not self._variable_order:
             return meas(intrules=self._guard_irs.GetIntegrationRules())
         return meas(intrules=self.irs.GetIntegrationRules())

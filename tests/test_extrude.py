@@ -66,13 +66,11 @@ def test_plane_strain_slab_reproduces_the_2d_run_through_the_crack():
 
     Through the peak the two runs agree to solver precision, step by step. The first dissipation
     step after it is a snap, and there the two runs may take different step sequences: the Newton
-    iterations of the two runs are not the same iteration (the slab's reaction scale, which sets
-    the convergence test and the line search's merit, also holds the reactions of the held u_z,
-    so it is 10.5 times the 2D one per unit thickness, not 28 as for the residual's norm; both
-    measured on the first step), and whether a dissipation step of the snap converges or is cut
-    back is decided on a knife edge (measured: at crack_advance = l0, the default, the 3D run
-    converged a step of 0.54 N mm/mm that the 2D run cut back three times (to 0.0675) on one machine; on an
-    earlier one both took the same steps).
+    iterations of the two runs are not the same iteration (the slab's residual also holds the
+    held u_z's dofs through the thickness), and whether a dissipation step of the snap converges
+    or is cut back is decided on a knife edge (measured: at crack_advance = l0, the default, the
+    3D run converged a step of 0.54 N mm/mm that the 2D run cut back three times (to 0.0675) on
+    one machine; on an earlier one both took the same steps).
 
     The state after a crack run depends on how the steps sampled it (the history H is a maximum
     over the sampled states). Measured on this mesh, the dissipated energy at 0.012 mm for
@@ -82,9 +80,11 @@ def test_plane_strain_slab_reproduces_the_2d_run_through_the_crack():
     comparison is made where they sample the crack run alike: at crack_advance = l0/4 the two
     runs still differ at the snap (measured: three cut-backs in 2D, two in 3D), but both step on
     the same levels of dissipated energy after it. At equal dissipated energy their forces agree to 1e-4 of the peak
-    (measured worst 7.1e-5, on the state after the snap, where one run had sampled one state
-    more; 1e-5 after it), and the ends agree to 1e-4 (measured 6.5e-6 in dissipated energy,
-    3.4e-7 of the peak in force).
+    after the first state past the peak (which has two equilibria at its dissipation, see below),
+    and the ends agree to 1e-4 (measured 6.5e-6 in dissipated energy, 3.4e-7 of the peak in
+    force). The slab's order-1 prisms are integrated at the triangle's centroid times two points
+    through the thickness (:func:`ngtmc.discretisation.term_rules`), its 2D twin's triangles at
+    the centroid: through the peak the two runs agree to 4e-11.
 
     Both runs use UMFPACK, which solves bitwise alike from run to run (sparsecholesky is not
     bitwise reproducible, docs/performance.md "Reproducibility")."""
@@ -108,14 +108,21 @@ def test_plane_strain_slab_reproduces_the_2d_run_through_the_crack():
     # after the peak: the states of the two runs at equal dissipated energy (a dissipation step
     # meets its dissipation to 1e-6 of the step)
     d2 = h2["dissipated_energy"].to_numpy()
+    # the first dissipation step after the peak, from the same state (1e-11) and with the same
+    # dissipation, has more than one equilibrium on the snap: measured 473.59 N/mm in 2D (7
+    # iterations) and 475.33 N/mm in 3D (13), both within their tolerance; both lie between the
+    # peak and the next states of either run
+    assert h3["dissipated_energy"].iloc[n] / t == pytest.approx(d2[n], abs=1e-6)
+    nxt = max(h2["force"].iloc[n + 1], h3["force"].iloc[n + 1] / t)
+    assert nxt < h3["force"].iloc[n] / t < F and nxt < h2["force"].iloc[n] < F
     matched = 0
-    for i in range(n, len(h3)):
+    for i in range(n + 1, len(h3)):
         d = h3["dissipated_energy"].iloc[i] / t
         j = np.flatnonzero(np.abs(d2 - d) <= 1e-6)
         if len(j):
             matched += 1
             assert h3["force"].iloc[i] / t == pytest.approx(h2["force"].iloc[j[0]], abs=1e-4 * F), d
-    assert matched >= 15   # measured 19: the crack run is compared state by state
+    assert matched >= 15   # measured 18: the crack run is compared state by state
     assert h3["load"].iloc[-1] == h2["load"].iloc[-1] == pytest.approx(0.012)
     assert h3["dissipated_energy"].iloc[-1] / t == pytest.approx(h2["dissipated_energy"].iloc[-1], rel=1e-4)
     assert h3["force"].iloc[-1] / t == pytest.approx(h2["force"].iloc[-1], abs=1e-4 * F)
