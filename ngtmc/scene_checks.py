@@ -70,6 +70,12 @@ def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
     regions = set(mesh.GetMaterials())
     boundaries = set(mesh.GetBoundaries())
     _check_patterns(scene, regions)
+    p, k = scene.displacement_order, mesh.GetCurveOrder()
+    if k > p:
+        from .scene import ElementWarning
+        warnings.warn(f"Scene.mesh is curved to order {k} (mesh.Curve({k})) but the displacement has order {p} "
+                      f"(Scene.order): a homogeneous deformation is not reproduced on the curved elements "
+                      f"(the patch test fails). Use order >= {k}, or mesh.Curve({p})", ElementWarning, stacklevel=4)
 
     def need_region(name, what):
         if not any(re.fullmatch(name, r) for r in regions):

@@ -82,7 +82,7 @@ def test_homogeneous_state_is_reproduced_exactly():
 def test_order_two_field_is_transferred_exactly_where_prolongation_is_not():
     """Variable order (order 2 in the void only): NGSolve's prolongation loses the quadratic part
     of u (the trap); the transfer of ngtmc.adapt keeps it exactly, and with it the energies."""
-    scene = two_blocks(maxh=0.2, void_maxh=0.05)
+    scene = two_blocks(maxh=0.2, void_maxh=0.05, variable_order=True)
     s = ngtmc.Solver(scene, compile=True)
     y = ngs.y
     f = ngs.IfPos(y - 0.45, 0.0025, ngs.IfPos(y - 0.4, (y - 0.4) ** 2, 0.0))

@@ -13,7 +13,7 @@ from scenes import two_blocks
 
 @pytest.fixture(scope="module")
 def solvers():
-    scene = dataclasses.replace(two_blocks(), fracture_regions="lower")
+    scene = dataclasses.replace(two_blocks(), fracture_regions="lower", variable_order=True)
     return ngtmc.Solver(scene), ngtmc.Solver(dataclasses.replace(scene, variable_order=False))
 
 
