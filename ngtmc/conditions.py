@@ -163,9 +163,14 @@ class DisplacementField:
     mesh); the others stay free and the field's entries there are ignored.
     name: label in the history (``force_<name>``), default from the boundary.
 
-    The recorded force of the load is the reaction conjugate to lambda, N: sum over the prescribed
-    dofs of the residual times d u_D / d lambda (for the uniform case, the reaction along the
-    direction).
+    The recorded force of the load is the reaction conjugate to lambda: sum over the prescribed
+    dofs of the residual (N) times d u_D / d lambda, the rate of the external work per unit
+    lambda. Its unit is N times that of d u_D / d lambda: N where lambda is a displacement in mm
+    and the field a dimensionless direction (a CoefficientFunction field such as ``CF((1, 0))``,
+    or a callable whose entries grow like lambda mm), N mm where lambda is dimensionless and the
+    field in mm (a rotation by theta = c lambda: the force is then the moment about the axis
+    times c, N mm per unit lambda). For the uniform case, the reaction along the direction, N.
+    (In 2D, per the scene's thickness as every force.)
     """
 
     boundary: str | Point
