@@ -50,6 +50,7 @@ from ..runfiles import (UNITS, effective_status, git_revision, jsonable, paramet
                         resume_parameters, typed_overrides, versions, write_atomic, write_json, write_npz)
 from ..study import StudyError, load_study, study_parameters
 from .cases import _Run
+from .claim import FolderClaim
 from .folder import HISTORY_COLUMNS, case_results
 from .user_scene import run_scene, scene_study
 
@@ -243,11 +244,26 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
         res, p = study_parameters(mod, resolution, overrides)
         typed = typed_overrides(p, overrides)
         out = Path(output) if output is not None else default_output(mod.NAME, res)
-        if out.exists() and (out / "history.csv").exists():
+    # one run per folder: claimed before anything is written or checked (FolderClaim)
+    with (FolderClaim(out, note=_say) if root else contextlib.nullcontext()):
+        if not resume and out.exists() and (out / "history.csv").exists():
             old = read_metadata(out) or {}
             status, note = effective_status(old) if old else ("unknown", None)
             raise StudyError(f"{out} holds a run already (status {status}{': ' + note if note else ''}): choose "
                              "another output, or resume=True / --resume to continue it")
+        return _claimed(mod, res, p, out, typed, comm, root, meta, resume, report, progress, threads, auto,
+                        parallel, workers, scheduler, checkpoint_every, checkpoint_seconds, callbacks, vtk)
+
+
+def _say(message: str):
+    """A line of the run's own (before its progress printer exists), on stderr."""
+    import sys
+    print(f"[ngtmc] {message}", file=sys.stderr, flush=True)
+
+
+def _claimed(mod, res, p, out, typed, comm, root, meta, resume, report, progress, threads, auto, parallel,
+             workers, scheduler, checkpoint_every, checkpoint_seconds, callbacks, vtk) -> "_Run":
+    """The rest of :func:`_execute`, in a folder this run has claimed."""
     with _rank_folder(out, comm) as rank_out:
         run = _Run(mod, res, p, rank_out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk,
                    comm=comm)

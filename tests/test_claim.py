@@ -1,0 +1,75 @@
+"""One run per run folder (issue 58): a run claims its folder before it writes anything; a second
+run into it is refused with a message naming the first, and nothing of the two is mixed."""
+import json
+import os
+from pathlib import Path
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+from ngtmc.runner.claim import CLAIM_FILE, FolderClaim, FolderInUse
+from ngtmc.study import StudyError
+from test_user_scene import STUDY_FILE
+
+
+def _claim_of(folder: Path, pid: int):
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / CLAIM_FILE).write_text(json.dumps({"pid": pid, "host": socket.gethostname(), "started": time.time()}))
+
+
+def test_a_live_claim_refuses_a_second_run_and_names_it(tmp_path):
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        _claim_of(tmp_path / "run", other.pid)
+        with pytest.raises(FolderInUse, match=f"in use by another run: process {other.pid}") as err:
+            FolderClaim(tmp_path / "run").acquire()
+        assert isinstance(err.value, StudyError)          # the command line prints it as a clear error
+        assert json.loads((tmp_path / "run" / CLAIM_FILE).read_text())["pid"] == other.pid   # left alone
+    finally:
+        other.kill()
+        other.wait()
+
+
+def test_a_stale_claim_is_taken_over_and_said_and_released_at_the_end(tmp_path):
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    _claim_of(tmp_path / "run", gone.pid)
+    said = []
+    with FolderClaim(tmp_path / "run", note=said.append):
+        assert json.loads((tmp_path / "run" / CLAIM_FILE).read_text())["pid"] == os.getpid()
+    assert said and "took over" in said[0] and str(gone.pid) in said[0]
+    assert not (tmp_path / "run" / CLAIM_FILE).exists()
+
+
+def test_a_refused_new_folder_is_not_left_behind(tmp_path):
+    with FolderClaim(tmp_path / "new"):
+        assert (tmp_path / "new").is_dir()
+    assert not (tmp_path / "new").exists()
+
+
+def test_two_runs_into_one_folder_the_second_is_refused(tmp_path):
+    """Two ``ngtmc run`` of a study file started 0.3 s apart into the same folder: the first
+    finishes, the second exits 2 naming the first's process; the folder holds one run."""
+    f = tmp_path / "my_study.py"
+    f.write_text(STUDY_FILE.format(tests=str(Path(__file__).parent)))
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "ngtmc", "run", str(f), "-o", str(out), "--threads", "1", "--no-vtk"]
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).parents[1]))
+    first = subprocess.Popen(cmd + ["--set", "final_load=1.0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True, env=env)
+    for _ in range(200):                     # until the first run has claimed the folder
+        if (out / CLAIM_FILE).exists():
+            break
+        time.sleep(0.05)
+    time.sleep(0.3)
+    second = subprocess.run(cmd + ["--set", "E=2000"], capture_output=True, text=True, env=env)
+    first_out, first_err = first.communicate(timeout=300)
+    assert first.returncode == 0, first_err
+    assert second.returncode == 2, second.stderr
+    assert f"in use by another run: process {first.pid}" in second.stderr
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["status"] == "completed" and meta["overrides"] == {"final_load": 1.0}
+    assert not (out / CLAIM_FILE).exists()
