@@ -42,6 +42,7 @@ if (not (_Path(__file__).resolve().parent / "studies").is_dir()
 from .materials import Material  # noqa: E402
 from .conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
 from .scene import ElementWarning, Regulariser, ResolutionWarning, Scene  # noqa: E402
+from .scene_scale import ScaleWarning  # noqa: E402
 from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate  # noqa: E402
 from .solver import NewtonOptions, Solver  # noqa: E402
 from .stepping import AdaptiveStepControl, Schedule  # noqa: E402
@@ -54,7 +55,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Material", "Scene", "Support", "DisplacementLoad", "DisplacementField", "Traction", "Point", "Regulariser",
-    "ResolutionWarning", "ElementWarning",
+    "ResolutionWarning", "ElementWarning", "ScaleWarning",
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
     "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "Adaptivity", "extrude", "distributed", "distribute",
     "__version__",

@@ -157,6 +157,10 @@ class Scene:
         paper's: in the history only) or "anisotropic" (also in the displacement equation: only
         Psi_plus is degraded). The single-pass, staggered and monolithic schemes and the adjoint
         of :mod:`ngtmc.sensitivities` all use the chosen pair.
+    scale_check : bool
+        Warn (:class:`ngtmc.ScaleWarning`) where E, Gc, l0, the body's size or a point lie outside
+        what is plausible in mm, N, MPa (:mod:`ngtmc.scene_scale`; default True). False when the
+        numbers are meant.
     """
 
     mesh: ngs.Mesh
@@ -177,6 +181,7 @@ class Scene:
     split: str = DEFAULT_SPLIT
     formulation: str = DEFAULT_FORMULATION
     force_from: str | None = None
+    scale_check: bool = True
 
     def __post_init__(self):
         if self.thickness is None and getattr(self.mesh, "dim", 2) == 2:

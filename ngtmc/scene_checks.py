@@ -121,6 +121,10 @@ def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
     if not (math.isfinite(scene.residual_stiffness) and 0.0 <= scene.residual_stiffness < 1.0):
         raise ValueError(f"Scene.residual_stiffness = {scene.residual_stiffness!r} is outside the allowed range [0, 1)")
     check_split(scene.split, scene.formulation, mesh.dim)
+    if not isinstance(scene.scale_check, bool):
+        raise TypeError(f"Scene.scale_check must be True or False, got {scene.scale_check!r}")
+    from .scene_scale import check_scale
+    check_scale(scene)
     if scene.has_fracture:
         _check_resolution(scene, refine_to)
     return scene
