@@ -4,7 +4,7 @@ states of a run and their loads, and the predictor through them,
     x = x_n + r (x_n - x_{n-1}),        x = (u, alpha), alpha kept in [alpha_n, 1],
 
 with r the ratio of the load or dissipation increments (at most 2), damped to r/2 or r/4 where
-the full secant would invert an element (:data:`ngtmc.displacement_newton.SECANT_DAMPING`).
+the full secant would invert an element (:data:`ngtmc.secant.SECANT_DAMPING`).
 
 Units: mm (loads and u).
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .displacement_newton import secant_displacement
+from .secant import secant_displacement
 
 __all__ = ["SecantPredictor"]
 

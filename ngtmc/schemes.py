@@ -21,7 +21,7 @@ import dataclasses
 
 import numpy as np
 
-from .displacement_newton import secant_displacement
+from .secant import secant_displacement
 
 __all__ = ["SCHEMES", "PATH_STEPS", "StepSchemes", "alpha_u_passes"]
 
@@ -201,7 +201,7 @@ class StepSchemes:
 
     def _predict_displacement(self, load: float) -> bool:
         """Start the displacement Newton of the step to ``load`` (mm) from the secant through the
-        last two accepted displacements (:func:`ngtmc.displacement_newton.secant_displacement`)
+        last two accepted displacements (:func:`ngtmc.secant.secant_displacement`)
         instead of the last one. The Newton converges to the same state (its tolerance); where
         the path is smooth it starts close to it, so that the first iteration is no longer spent
         carrying the boundary increment (the quick L-panel's case monotonic: 434 -> 313 Newton

@@ -337,7 +337,7 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
     J > 0: here the full secant is refused once, so the predictor is u_n + 0.5 (u_n - u_{n-1}) on
     the free dofs, the boundary values those of the step's load, and alpha as extrapolated by
     half, kept in [alpha_n, 1]. If every fraction inverts, the state is left as it was."""
-    from ngtmc.displacement_newton import SECANT_DAMPING
+    from ngtmc.secant import SECANT_DAMPING
     assert SECANT_DAMPING[0] == 1.0 and SECANT_DAMPING[1] == 0.5
     sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
                            scheme="path-following")

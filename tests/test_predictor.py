@@ -1,5 +1,5 @@
 """The secant predictor of the displacement Newton (ngtmc.schemes.StepSchemes._predict_displacement,
-ngtmc.displacement_newton.secant_displacement): the same converged states as the start from the
+ngtmc.secant.secant_displacement): the same converged states as the start from the
 last accepted step, fewer Newton iterations, no extrapolation across a load reversal, and a
 checkpoint that keeps the secant's point (seconds)."""
 from __future__ import annotations
