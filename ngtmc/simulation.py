@@ -32,6 +32,7 @@ from .simulation_records import RunRecords
 from .simulation_refine import RunRefinement
 from .simulation_state import RunState
 from .stepping import AdaptiveStepControl, ControlState, Schedule
+from .options import RUN_FOLDER_OPTIONS, check_options, simulation_keywords
 
 __all__ = ["Simulation", "SimulationResult", "StepFailure", "HISTORY_UNITS", "SCHEMES", "PATH_STEPS", "simulate", "check_stop_after_drop"]
 
@@ -81,39 +82,6 @@ class SimulationResult:
         force is finite."""
         _, x = peak(self.history["force"], self.history["load"])
         return math.nan if x is None else x
-
-
-#: Keywords of :func:`simulate` that only a run folder (``out_dir``) uses.
-RUN_FOLDER_OPTIONS = frozenset({"resume", "report", "vtk", "threads", "checkpoint_every", "checkpoint_seconds",
-                                "name", "title", "summary", "snapshot_loads", "references", "targets", "section"})
-
-#: Keywords that :class:`Simulation` no longer takes, with what replaced them.
-REMOVED_OPTIONS = {
-    "staggered": "scheme='staggered' (and staggered_tol, max_staggered)",
-    "monolithic": "scheme='monolithic'",
-    "path_following": "scheme='path-following'",
-    "newton_options": "newton=ngtmc.NewtonOptions(...)",
-    "adaptivity": "adapt=ngtmc.Adaptivity(...)",
-}
-
-
-def check_options(options: dict, where: str = "ngtmc.Simulation"):
-    """Raise TypeError for a keyword that :class:`Simulation` does not take, naming ``where`` (the
-    public function called), the replacement of a removed keyword, or the nearest valid one."""
-    import difflib
-    import inspect
-    valid = [n for n, p in inspect.signature(Simulation.__init__).parameters.items()
-             if n not in ("self", "scene", "schedule") and p.kind is not p.VAR_KEYWORD]
-    for key in options:
-        if key in valid:
-            continue
-        if key in REMOVED_OPTIONS:
-            raise TypeError(f"{where}: the keyword {key!r} was removed; use {REMOVED_OPTIONS[key]}")
-        near = difflib.get_close_matches(key, valid + sorted(RUN_FOLDER_OPTIONS), n=1)
-        hint = f"; did you mean {near[0]!r}?" if near else ""
-        raise TypeError(f"{where}: unknown keyword {key!r}{hint} (it takes {', '.join(valid)}"
-                        + (", and with out_dir: " + ", ".join(sorted(RUN_FOLDER_OPTIONS | {'callbacks'})) + ")"
-                           if where == "ngtmc.simulate" else ")"))
 
 
 def check_stop_after_drop(value, schedule: Schedule | None = None):
@@ -196,8 +164,8 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
                  newton: NewtonOptions | None = None, progress: bool | Callable = False,
                  max_steps: int = 100000, compile: bool | str = "auto", coupled: dict | None = None,
                  adapt=None, stop_after_drop: float | None = None, **unknown):
-        if unknown:
-            check_options(unknown)   # a removed or misspelt keyword: named, with its replacement
+        if unknown:   # a removed or misspelt keyword: named, with its replacement
+            check_options(unknown, simulation_keywords(type(self)), "ngtmc.Simulation")
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be an ngtmc.Scene, got {type(scene).__name__}")
         if not isinstance(schedule, Schedule):
@@ -415,5 +383,5 @@ def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepCont
         raise TypeError(f"ngtmc.simulate: {', '.join(folder_only)} {'needs' if len(folder_only) == 1 else 'need'} a "
                         "run folder; pass out_dir='runs/my_scene' as well (or leave "
                         f"{'it' if len(folder_only) == 1 else 'them'} out for a run kept in memory)")
-    check_options(options, "ngtmc.simulate")
+    check_options(options, simulation_keywords(Simulation), "ngtmc.simulate")
     return Simulation(scene, schedule, control, **options).run(callbacks=callbacks)

@@ -348,3 +348,20 @@ def test_compiled_energies_equal_the_uncompiled_ones(kind):
     for k in ("elastic_energy", "regularisation_energy"):
         assert e1[k] == pytest.approx(e0[k], rel=1e-12)
     assert np.allclose(r1, r0, rtol=0, atol=1e-12 * np.abs(r0).max())
+
+
+def test_api_messages_name_the_public_function_and_the_replacement():
+    """simulate(callbacks=) without out_dir runs them; a run-folder keyword without out_dir, a
+    removed keyword and a misspelt one are named with the public function and what to write."""
+    from scenes import tension_bar
+    rows = []
+    res = ngtmc.simulate(tension_bar(fracture=False), 0.01, callbacks=[lambda sim, row: rows.append(row["step"])])
+    assert rows == list(range(1, len(res.history)))
+    with pytest.raises(TypeError, match=r"ngtmc.simulate: vtk needs a run folder; pass out_dir="):
+        ngtmc.simulate(tension_bar(fracture=False), 0.01, vtk=False)
+    with pytest.raises(TypeError, match=r"ngtmc.simulate: the keyword 'staggered' was removed; use scheme='staggered'"):
+        ngtmc.simulate(tension_bar(fracture=False), 0.01, staggered=True)
+    with pytest.raises(TypeError, match=r"ngtmc.Simulation: the keyword 'staggered' was removed"):
+        ngtmc.Simulation(tension_bar(fracture=False), 0.01, staggered=True)
+    with pytest.raises(TypeError, match=r"unknown keyword 'newtn'; did you mean 'newton'\?"):
+        ngtmc.simulate(tension_bar(fracture=False), 0.01, newtn=None)
