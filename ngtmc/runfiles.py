@@ -29,7 +29,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "HISTORY_NOTES", "history_units", "CheckpointWarning", "write_atomic", "write_json", "write_npz",
+__all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "write_atomic", "write_json", "write_npz",
            "jsonable", "peak", "peak_index", "UNITS", "versions", "git_revision", "parameter_table", "physics_hash",
            "run_description", "parameters_hash", "process_info", "effective_status", "read_metadata",
            "resume_parameters"]
@@ -60,18 +60,8 @@ HISTORY_UNITS = {
     "wall_time": "s",
     "solve_time": "s",
     "assembly_time": "s",
-    "residual": "N",
-    "floor_accepts": "-",
-}
-
-#: What the columns of :data:`HISTORY_UNITS` hold that their names do not say. ``residual``: the
-#: norm of the displacement equation's residual on the free dofs of the accepted state (N, for the
-#: scene thickness in 2D), against which the tolerance of ``NewtonOptions`` is stated;
-#: ``floor_accepts``: the solves of the step's attempts accepted at the residual floor
-#: (``NewtonOptions.floor_rtol``) instead of the tolerance (0 in a step that met it).
-HISTORY_NOTES = {
-    "residual": "free-dof residual norm of the accepted state",
-    "floor_accepts": "solves of the step accepted at the residual floor (NewtonOptions.floor_rtol), not at rtol",
+    "residual": "N",            # free-dof residual norm of the accepted state (docs/run-directory.md)
+    "floor_accepts": "-",       # solves of the step accepted at NewtonOptions.floor_rtol, not rtol
 }
 
 

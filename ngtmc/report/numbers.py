@@ -189,9 +189,9 @@ def physics_key(meta: dict) -> str:
 
 
 def case_numbers(meta: dict, history: pd.DataFrame, case: str) -> dict:
-    """Key numbers of one case: peak force (force unit) and its displacement (mm), steps,
-    Newton iterations, cut-backs, solves accepted at the residual floor and the largest residual
-    of an accepted state (force unit), wall time (s), final W_f (N mm) and max alpha (-).
+    """Key numbers of one case: peak force (force unit) and its displacement (mm), steps, Newton
+    iterations, cut-backs, floor acceptances, the largest residual of an accepted state (force
+    unit), wall time (s), final W_f (N mm) and max alpha (-).
 
     Taken from the history when it has the case, else from ``metadata["results"][case]``.
     """
@@ -209,13 +209,10 @@ def case_numbers(meta: dict, history: pd.DataFrame, case: str) -> dict:
         out["steps"] = int(np.nanmax(steps))
     else:
         out["steps"] = res.get("steps")
-    for col, key in (("newton_iterations", "newton_iterations"), ("cutbacks", "cutbacks"),
-                     ("floor_accepts", "floor_accepts")):
+    for col in ("newton_iterations", "cutbacks", "floor_accepts"):   # floor_accepts: None in runs before 0.2
         v = h[col].to_numpy(dtype=float) if len(h) and col in h else np.array([])
-        out[key] = int(np.nansum(v)) if v.size and np.isfinite(v).any() else res.get(key)
-    # the largest residual of an accepted state (N; None for a run recorded before the column)
-    v = h["residual"].to_numpy(dtype=float) if len(h) and "residual" in h else np.array([])
-    out["max_residual"] = float(np.nanmax(v)) if v.size and np.isfinite(v).any() else None
+        out[col] = int(np.nansum(v)) if v.size and np.isfinite(v).any() else res.get(col)
+    out["max_residual"] = float(h["residual"].max()) if "residual" in h and h["residual"].notna().any() else None
     if _finite(res.get("wall_time_s")):
         out["wall_time_s"] = float(res["wall_time_s"])
     else:
