@@ -20,6 +20,7 @@ The history itself is the Simulation's list of rows; the run writes it with its 
 from __future__ import annotations
 
 from collections import deque
+import math
 import sys
 import time
 from typing import Callable, Sequence
@@ -53,12 +54,27 @@ class Progress(Plugin):
     """Progress line on stderr about every ``interval`` seconds and at the last step.
 
     ``prefix`` starts each line (e.g. ``"[ngtmc]"`` or ``"[ngtmc three_point_bending] case 1/5
-    main:"``); ``unit`` is the force unit of the run (:func:`force_unit`). The time left is an
-    estimate from the pace (load path per second of wall time) over the last ``window`` seconds,
-    so shrinking steps after a crack starts slow it down instead of being averaged away; it is
-    labelled as an estimate, and left out (said so) while it exceeds 20 times the time so far
-    (steps of a crack running at almost constant load, after which they grow again). ``enabled`` may be a callable, which then receives each row instead.
+    main:"``); ``unit`` is the force unit of the run (:func:`force_unit`). Every line gives the
+    step, load, force, elapsed time and the share of the load path reached: the furthest share so
+    far, so that it never goes back (path following turns the load back in a snap-back; the
+    line then says so).
+
+    The time left is an estimate from the pace (load path per second of wall time) over the last
+    ``window`` seconds, so shrinking steps after a crack starts slow it down instead of being
+    averaged away; it is labelled as an estimate, and left out (said so) where it cannot be made
+    honestly: while the crack runs (a crack has formed, max alpha >= CRACK_ALPHA, and the
+    dissipated energy grew by more than CRACK_RUNNING of its value within the window: the steps
+    then shrink and grow again in ways the pace cannot foresee), while the load turns back, and while it exceeds 20 times the time so far (steps
+    of a crack running at almost constant load). Its measured error on the quick studies:
+    ``benchmarks/progress_estimate.py``. ``enabled`` may be a callable, which then receives
+    each row instead.
     """
+
+    #: The crack runs (no estimate) while the dissipated energy grows by more than this share of
+    #: its value within the pace window.
+    CRACK_RUNNING = 0.01
+    #: ... once a crack has formed: AT-2 damages diffusely from the first step, below this.
+    CRACK_ALPHA = 0.95
 
     def __init__(self, enabled: bool | Callable = True, prefix: str = "[ngtmc]", unit: str = "N",
                  interval: float = 5.0, window: float = 60.0, case: str | None = None):
@@ -70,6 +86,8 @@ class Progress(Plugin):
         self.case = case
         self.last = -1e9
         self.pace: deque = deque()     # (elapsed wall time s, pseudo-time of the load path)
+        self.dissipation: deque = deque()   # (elapsed wall time s, dissipated energy N mm)
+        self.furthest = 0.0            # the largest share of the load path reached
 
     def say(self, text: str):
         if self.enabled is True:
@@ -85,13 +103,33 @@ class Progress(Plugin):
             return None
         return (total - t) * (elapsed - e0) / (t - t0), elapsed - e0
 
+    def crack_running(self, elapsed: float, row: dict) -> bool:
+        """True while the dissipated energy of the row grew by more than CRACK_RUNNING of its value
+        within the pace window."""
+        d, a = row.get("dissipated_energy"), row.get("max_alpha")
+        if d is None or not math.isfinite(float(d)):
+            return False
+        self.dissipation.append((elapsed, float(d)))
+        while len(self.dissipation) > 2 and elapsed - self.dissipation[1][0] >= self.window:
+            self.dissipation.popleft()
+        d0 = self.dissipation[0][1]
+        cracked = a is not None and float(a) >= self.CRACK_ALPHA
+        return cracked and float(d) > 0 and float(d) - d0 > self.CRACK_RUNNING * float(d)
+
     def line(self, sim, row: dict) -> str:
         total = sim.schedule.total_time
         frac = sim.t / total if total > 0 else 1.0
+        back = frac < self.furthest - 1e-12
+        self.furthest = max(self.furthest, frac)
         el = float(row.get("wall_time", 0.0) or 0.0)
         left = self.time_left(el, sim.t, total)
+        running = self.crack_running(el, row)
         eta = ""
-        if left is not None and frac < 1.0:
+        if back:
+            eta = ", the load turns back (snap-back): no estimate of the time left"
+        elif running and self.furthest < 1.0:
+            eta = ", no estimate of the time left while the crack runs"
+        elif left is not None and frac < 1.0:
             if left[0] > 20.0 * max(el, 60.0):
                 # tiny steps (a crack running at almost constant load): the recent pace says
                 # nothing about the rest of the path, where the steps grow again
@@ -103,7 +141,7 @@ class Progress(Plugin):
         mesh = f"  {row['elements']} elements" if "elements" in row else ""   # adaptive refinement
         return (f"{self.prefix} step {row['step']:5d}  load {row['load']:.6g} mm  du {row['step_size']:.2e} mm  "
                 f"force {row['force']:.5g} {self.unit}{alpha}  Newton {row['newton_iterations']}  "
-                f"cut-backs {row['cutbacks']}{mesh}  {100 * frac:5.1f} % of the load path  {el:.0f} s{eta}")
+                f"cut-backs {row['cutbacks']}{mesh}  {100 * self.furthest:5.1f} % of the load path  {el:.0f} s{eta}")
 
     def step(self, sim, row: dict):
         if not self.enabled:
@@ -113,8 +151,12 @@ class Progress(Plugin):
             return
         now = time.perf_counter()
         if now - self.last < self.interval and not sim.finished:
-            # the pace still needs every step's time
-            self.time_left(float(row.get("wall_time", 0.0) or 0.0), sim.t, sim.schedule.total_time)
+            # the pace, the dissipation and the furthest share still need every step
+            el = float(row.get("wall_time", 0.0) or 0.0)
+            self.time_left(el, sim.t, sim.schedule.total_time)
+            self.crack_running(el, row)
+            total = sim.schedule.total_time
+            self.furthest = max(self.furthest, sim.t / total if total > 0 else 1.0)
             return
         self.last = now
         print(self.line(sim, row), file=sys.stderr, flush=True)

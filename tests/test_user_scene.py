@@ -237,3 +237,25 @@ def test_report_output_plugin(tmp_path, capsys, monkeypatch):
         ReportOutput(tmp_path, strict=True).finish("completed")
     ReportOutput(tmp_path, strict=False).finish("completed")
     assert "report not rendered" in capsys.readouterr().err
+
+
+def test_no_time_left_while_the_crack_runs_and_the_share_never_goes_back():
+    """The estimate is left out while the dissipated energy grows with a crack formed (the crack runs) and while path
+    following turns the load back; the share of the load path is the furthest reached."""
+    p = Progress(True, unit="N/mm", window=20.0)
+    sim = _FakeSim(1.0)
+    row = {"step": 1, "load": 0.0, "step_size": 0.01, "force": 1.0, "newton_iterations": 3, "cutbacks": 0,
+           "max_alpha": 1.0}
+    for k, (t, d) in enumerate([(0.1, 0.0), (0.2, 0.0), (0.3, 0.0), (0.4, 0.0)]):
+        sim.t = t
+        line = p.line(sim, dict(row, load=t, wall_time=5.0 * (k + 1), dissipated_energy=d))
+    assert "s left" in line                       # no dissipation: the pace holds
+    sim.t = 0.42                                  # diffuse damage (max alpha 0.5) growing: still estimated
+    assert "s left" in p.line(sim, dict(row, load=0.42, wall_time=22.0, dissipated_energy=0.05, max_alpha=0.5))
+    for k, (t, d) in enumerate([(0.45, 0.1), (0.5, 0.3), (0.55, 0.6)]):
+        sim.t = t
+        line = p.line(sim, dict(row, load=t, wall_time=25.0 + 5.0 * k, dissipated_energy=d))
+    assert "no estimate of the time left while the crack runs" in line and "s left" not in line
+    sim.t = 0.5                                   # a snap-back: the load turns back
+    line = p.line(sim, dict(row, load=0.5, wall_time=45.0, dissipated_energy=0.7))
+    assert "55.0 % of the load path" in line and "turns back" in line and "s left" not in line
