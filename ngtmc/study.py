@@ -25,6 +25,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .study_contract import StudyError, check_contract, normalise_name
+
 __all__ = ["Case", "StudyError", "STUDIES", "ENTRY_POINT_GROUP", "registered_studies", "list_studies", "load_study", "load_study_file", "normalise_name", "study_parameters",
            "SOLVER_PARAMETERS", "simulation_options", "data_path"]
 
@@ -227,13 +229,6 @@ class Case:
         return self.scene
 
 
-class StudyError(ValueError):
-    """Unknown study name, unknown resolution or unknown override."""
-
-
-def normalise_name(name: str) -> str:
-    """``"three-point-bending"`` -> ``"three_point_bending"``."""
-    return str(name).strip().replace("-", "_").lower()
 
 
 #: The named studies that ship with ngtmc: study name -> module path. The registry is the only
@@ -297,18 +292,19 @@ def load_study_file(path) -> ModuleType:
     except Exception as e:
         sys.modules.pop(modname, None)
         raise StudyError(f"study file {str(path)!r} cannot be imported: {type(e).__name__}: {e}") from e
-    _check_study(mod, str(f))
+    check_contract(mod, str(f), shipped={k: m for k, m in registered_studies().items() if not _is_file_of(m, f)})
     return mod
 
 
-def _check_study(mod: ModuleType, where: str):
-    missing = [a for a in ("NAME", "PARAMETERS", "RESOLUTIONS", "cases") if not hasattr(mod, a)]
-    if missing:
-        raise StudyError(f"study module {where} lacks {', '.join(missing)} (see docs/study-interface.md)")
-    unknown = [n for n in getattr(mod, "ADDED_AT_DEFAULT", ()) if n not in mod.PARAMETERS]
-    if isinstance(getattr(mod, "ADDED_AT_DEFAULT", ()), str) or unknown:
-        raise StudyError(f"study module {where}: ADDED_AT_DEFAULT must be a tuple of names of its PARAMETERS; "
-                         f"not parameters: {unknown or mod.ADDED_AT_DEFAULT!r}")
+def _is_file_of(module: str, f) -> bool:
+    """True when ``f`` is the file of the registered study module ``module`` (a study run from its path)."""
+    import importlib.util
+    from pathlib import Path
+    try:
+        spec = importlib.util.find_spec(module)
+    except (ImportError, ValueError):
+        return False
+    return bool(spec and spec.origin) and Path(spec.origin).resolve() == Path(f).resolve()
 
 
 def load_study(name: str) -> ModuleType:
@@ -330,7 +326,7 @@ def load_study(name: str) -> ModuleType:
     except ImportError as e:
         raise StudyError(f"study {key!r} is registered as module {where!r}, which cannot be imported "
                          f"({type(e).__name__}: {e})") from e
-    _check_study(mod, getattr(mod, "__file__", None) or where)
+    check_contract(mod, getattr(mod, "__file__", None) or where)
     return mod
 
 

@@ -73,3 +73,26 @@ def test_two_runs_into_one_folder_the_second_is_refused(tmp_path):
     meta = json.loads((out / "metadata.json").read_text())
     assert meta["status"] == "completed" and meta["overrides"] == {"final_load": 1.0}
     assert not (out / CLAIM_FILE).exists()
+
+
+# ----------------------------------------------------------------- a study file's contract
+@pytest.mark.parametrize("body, words", [
+    ('NAME = "three_point_bending"\nPARAMETERS = {"E": (1.0, "MPa", "x")}\nRESOLUTIONS = {"quick": {}}\n'
+     'def cases(p): return []\n', "is the name of a study of ngtmc"),
+    ('NAME = "my_empty"\nPARAMETERS = {"E": (1.0, "MPa", "x")}\nRESOLUTIONS = {"quick": {}}\n'
+     'def cases(p): return []\n', "cases() returned no case"),
+    ('NAME = "my_badpar"\nPARAMETERS = {"E": 1.0}\nRESOLUTIONS = {"quick": {}}\ndef cases(p): return []\n',
+     "PARAMETERS['E'] = 1.0 must be a tuple (default, unit, description)"),
+    ('NAME = ""\nPARAMETERS = {}\nRESOLUTIONS = {"quick": {}}\ndef cases(p): return []\n',
+     "NAME must be a non-empty string"),
+    ('NAME = "my_res"\nPARAMETERS = {}\nRESOLUTIONS = {"quick": 1}\ndef cases(p): return []\n',
+     "RESOLUTIONS must be a non-empty dict"),
+])
+def test_a_study_file_that_breaks_its_contract_is_refused_and_leaves_no_folder(tmp_path, body, words):
+    from ngtmc.runner import run_study
+    f = tmp_path / "s.py"
+    f.write_text(body)
+    with pytest.raises(StudyError) as err:
+        run_study(str(f), output=tmp_path / "out", progress=False)
+    assert words in str(err.value)
+    assert not (tmp_path / "out").exists()

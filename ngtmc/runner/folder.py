@@ -103,6 +103,9 @@ class RunFolder:
         except (ValueError, TypeError) as e:     # bad parameters, refused before any folder exists
             raise StudyError(f"study {mod.NAME!r} cannot build its cases: {e}") from e
         names = [c.name for c in self.cases]
+        if not names:   # a run of nothing is no completed run
+            raise StudyError(f"study {mod.NAME!r}: cases() returned no case at resolution {resolution!r}; "
+                             "it must return a list of ngtmc.study.Case")
         if len(set(names)) != len(names):
             raise StudyError(f"study {mod.NAME!r}: case names are not unique: {names}")
         bad = [n for n in names if "@" in n or "__" in n or not n]
