@@ -174,6 +174,7 @@ def _check_conditions(scene: Scene, need_boundary):
         for c in s.components():
             claim(key, c, desc, False)
     names = []
+    moving = set()   # (where, component) that a load moves (not only holds)
     for ld in scene.loads:
         if not isinstance(ld, LOAD_KINDS):
             raise TypeError(f"Scene.load must be a DisplacementLoad, DisplacementField or Traction (or a list "
@@ -200,11 +201,46 @@ def _check_conditions(scene: Scene, need_boundary):
             if c >= d:
                 raise ValueError(f"{desc}: component {_LETTERS[c]} does not exist in {d}D")
             claim(key, c, desc, True)
+            if not isinstance(ld, DisplacementLoad) or c == ld.component:
+                moving.add((key, c))     # a DisplacementLoad's held tangential components stay at 0
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise ValueError(f"loads {dup} share a name: give each load its own name (name=...), it names its "
                          "history column force_<name>")
     scene.force_load  # a force_from that names no load raises here
+    _check_shared_vertices(mesh, held, moving)
+
+
+def _check_shared_vertices(mesh, held: dict, moving: set):
+    """Conditions per vertex: where two boundaries meet (a corner), a load that moves a component
+    and another condition on that component of the shared vertex (a support, a held tangential
+    component, another load) cannot both hold; the last one set would win silently. ``held``:
+    (("boundary", name) or ("vertex", nr), component) -> (description, is_load); ``moving``: the
+    keys of ``held`` that a load moves (conditions that hold 0 agree with each other)."""
+    on = {}       # boundary regex -> its vertex numbers
+    per_vertex = {}
+    for (key, c), (desc, is_load) in held.items():
+        is_load = (key, c) in moving
+        if key[0] == "vertex":
+            vs = {key[1]}
+        else:
+            if key[1] not in on:
+                on[key[1]] = {v.nr for el in mesh.Elements(ngs.BND) if re.fullmatch(key[1], el.mat)
+                              for v in el.vertices}
+            vs = on[key[1]]
+        for v in vs:
+            per_vertex.setdefault((v, c), []).append((desc, is_load))
+    pts = None
+    for (v, c), conds in sorted(per_vertex.items()):
+        loads = [dsc for dsc, is_load in conds if is_load]
+        if len(conds) > 1 and loads:
+            if pts is None:
+                pts = np.asarray(mesh.ngmesh.Coordinates())
+            at = ", ".join(f"{x:g}" for x in pts[v, :mesh.dim])
+            others = [dsc for dsc in (dsc for dsc, _ in conds) if dsc != loads[0]]
+            raise ValueError(f"vertex {v} at ({at}) mm, where boundaries meet: component {_LETTERS[c]} is prescribed by "
+                             f"{loads[0]} and also by {' and '.join(others)}; one of them would win silently. "
+                             "Name the boundary without that corner, or hold the corner by a Point condition")
 
 
 def _check_field(scene: Scene, ld, desc, key):

@@ -128,3 +128,18 @@ def test_failure_at_minimum_step_keeps_the_history():
     assert list(h["step"]) == list(range(len(h)))
     assert np.all(np.isfinite(h["force"]))
     assert info.value.state is not None
+
+
+def test_a_load_and_a_support_on_one_component_of_a_shared_corner_are_refused():
+    """Support("left", x, y) and a load on "top" in y meet at the corner (0, 0.2): the corner's y
+    cannot be both held and moved (the load used to win silently); named with the vertex. A
+    load's held tangential components and a support both hold 0 there, which agrees."""
+    from scenes import bar_mesh
+    m = bar_mesh()
+    mat = {"bar": ngtmc.Material(1000.0, 0.3)}
+    sc = ngtmc.Scene(m, mat, supports=[ngtmc.Support("left", x=True, y=True)], load=ngtmc.DisplacementLoad("top", "-y"))
+    with pytest.raises(ValueError, match=r"vertex \d+ at \(0, 0.2\) mm, where boundaries meet: component y"):
+        sc.check()
+    ok = ngtmc.Scene(m, mat, supports=[ngtmc.Support("left", x=True)],
+                     load=ngtmc.DisplacementLoad("top", "-y", hold_tangential=True))
+    ok.check()     # x held by both at the corner: both hold 0
