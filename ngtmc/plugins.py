@@ -62,9 +62,11 @@ class Progress(Plugin):
     The time left is an estimate from the pace (load path per second of wall time) over the last
     ``window`` seconds, so shrinking steps after a crack starts slow it down instead of being
     averaged away; it is labelled as an estimate, and left out (said so) where it cannot be made
-    honestly: while the crack runs (a crack has formed, max alpha >= CRACK_ALPHA, and the
-    dissipated energy grew by more than CRACK_RUNNING of its value within the window: the steps
-    then shrink and grow again in ways the pace cannot foresee), while the load turns back, and while it exceeds 20 times the time so far (steps
+    honestly: in a scene that may crack, before the crack has formed (max alpha < CRACK_ALPHA:
+    the pace before the peak said 1/10 of the time left on the quick three-point bending) and
+    while it runs (the dissipated energy grew by more than CRACK_RUNNING of its value within the
+    window: the steps then shrink and grow again in ways the pace cannot foresee), while the
+    load turns back, and while it exceeds 20 times the time so far (steps
     of a crack running at almost constant load). Its measured error on the quick studies:
     ``benchmarks/progress_estimate.py``. ``enabled`` may be a callable, which then receives
     each row instead.
@@ -125,8 +127,12 @@ class Progress(Plugin):
         left = self.time_left(el, sim.t, total)
         running = self.crack_running(el, row)
         eta = ""
+        cracks = getattr(sim.solver, "alpha", None) is not None
+        alpha_max = row.get("max_alpha")
         if back:
             eta = ", the load turns back (snap-back): no estimate of the time left"
+        elif cracks and (alpha_max is None or alpha_max < self.CRACK_ALPHA) and self.furthest < 1.0:
+            eta = ", no estimate of the time left before the crack has run (its steps cannot be foreseen)"
         elif running and self.furthest < 1.0:
             eta = ", no estimate of the time left while the crack runs"
         elif left is not None and frac < 1.0:

@@ -259,3 +259,19 @@ def test_no_time_left_while_the_crack_runs_and_the_share_never_goes_back():
     sim.t = 0.5                                   # a snap-back: the load turns back
     line = p.line(sim, dict(row, load=0.5, wall_time=45.0, dissipated_energy=0.7))
     assert "55.0 % of the load path" in line and "turns back" in line and "s left" not in line
+
+
+def test_no_time_left_before_the_crack_has_run():
+    """A scene that may crack: before a crack has formed the pace cannot foresee the crack run's
+    steps (the quick three-point bending's pace said a tenth of the time left), so no estimate."""
+    p = Progress(True, unit="N/mm", window=20.0)
+    sim = _FakeSim(1.0)
+    sim.solver = type("V", (), {"alpha": object()})()
+    row = {"step": 1, "step_size": 0.01, "force": 1.0, "newton_iterations": 3, "cutbacks": 0, "dissipated_energy": 0.0}
+    for k, t in enumerate([0.1, 0.2, 0.3]):
+        sim.t = t
+        line = p.line(sim, dict(row, load=t, wall_time=5.0 * (k + 1), max_alpha=0.3))
+    assert "before the crack has run" in line and "s left" not in line
+    sim.t = 0.5
+    line = p.line(sim, dict(row, load=0.5, wall_time=40.0, max_alpha=1.0, dissipated_energy=0.0))
+    assert "s left" in line
