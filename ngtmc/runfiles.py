@@ -99,12 +99,15 @@ def peak_index(force) -> int | None:
 def peak(force, load) -> tuple[float, float] | tuple[None, None]:
     """The peak of a force-load curve: ``(peak force, load at it)`` as floats, in the units of the
     inputs (force unit, mm), at the row of :func:`peak_index`; ``(None, None)`` when no force is
-    finite. ``force`` and ``load`` have one value per row (equal lengths)."""
+    finite. ``force`` and ``load``: one value per row. A curve loaded mostly in the negative
+    direction has its peak at its most negative force (not the 0 N of its start)."""
     f = np.asarray(force, dtype=float).ravel()
     x = np.asarray(load, dtype=float).ravel()
     if f.size != x.size:
         raise ValueError(f"peak: {f.size} forces but {x.size} loads; give one load per force")
-    i = peak_index(f)
+    xs = x[np.isfinite(x)]
+    negative = xs.size and -xs.min() > xs.max()
+    i = peak_index(-f if negative else f)
     if i is None:
         return None, None
     return float(f[i]), float(x[i])

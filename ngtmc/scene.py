@@ -184,6 +184,8 @@ class Scene:
     scale_check: bool = True
 
     def __post_init__(self):
+        if isinstance(self.supports, Support):      # one support given without a list
+            self.supports = [self.supports]
         if self.thickness is None and getattr(self.mesh, "dim", 2) == 2:
             self.thickness = 1.0
         check_split(self.split, self.formulation)

@@ -131,6 +131,9 @@ class StepSchemes:
         self.staggered_tol = float(staggered_tol)
         self.max_staggered = int(max_staggered)
         self.coupled = None
+        if coupled is not None and not isinstance(coupled, dict):
+            raise TypeError(f"coupled must be a dict of the monolithic scheme's options (e.g. "
+                            f"{{'linear_solver': 'umfpack'}}) or None, got {type(coupled).__name__} {coupled!r}")
         copt = dict(coupled or {})
         if scheme == "path-following":
             copt.setdefault("path", "dissipation")

@@ -51,6 +51,22 @@ AUTO_REAL_COMPILE_DOFS = 10000
 TIMING_KEYS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
 
 
+def _newton_options(newton) -> NewtonOptions:
+    """A copy of ``newton`` (a NewtonOptions, a dict of its fields, or None for the defaults), so
+    that the object passed in comes back unchanged; TypeError naming an unknown field."""
+    if newton is None:
+        return NewtonOptions()
+    if isinstance(newton, dict):
+        fields = [f.name for f in dataclasses.fields(NewtonOptions)]
+        unknown = [k for k in newton if k not in fields]
+        if unknown:
+            raise TypeError(f"newton: unknown option(s) {unknown}; NewtonOptions takes {', '.join(fields)}")
+        return NewtonOptions(**newton)
+    if not isinstance(newton, NewtonOptions):
+        raise TypeError(f"newton must be an ngtmc.NewtonOptions (or a dict of its fields), got {type(newton).__name__}")
+    return dataclasses.replace(newton)
+
+
 class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFieldHistory):
     """Fields and solvers of a :class:`~ngtmc.scene.Scene`.
 
@@ -77,7 +93,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         scene.check(refine_to)
         self.scene = scene
         # a copy: the options object passed in comes back unchanged (atol is filled in below)
-        self.newton = dataclasses.replace(newton) if newton is not None else NewtonOptions()
+        self.newton = _newton_options(newton)
         self.mesh = mesh = scene.mesh
         #: reductions over MPI ranks (:mod:`ngtmc.distributed`; the serial expressions on a serial mesh)
         self.ranks = Ranks(mesh)

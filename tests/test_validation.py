@@ -143,3 +143,25 @@ def test_a_load_and_a_support_on_one_component_of_a_shared_corner_are_refused():
     ok = ngtmc.Scene(m, mat, supports=[ngtmc.Support("left", x=True)],
                      load=ngtmc.DisplacementLoad("top", "-y", hold_tangential=True))
     ok.check()     # x held by both at the corner: both hold 0
+
+
+def test_options_of_the_api_are_type_checked_naming_the_parameter():
+    from scenes import tension_bar
+    sc = tension_bar(fracture=False)
+    one = ngtmc.Scene(sc.mesh, sc.materials, supports=ngtmc.Support("left", x=True), load=sc.load)
+    assert len(one.supports) == 1                 # one Support without a list is taken as the list
+    with pytest.raises(TypeError, match="coupled must be a dict"):
+        ngtmc.Simulation(sc, 0.01, coupled="yes")
+    with pytest.raises(TypeError, match=r"newton: unknown option\(s\) \['tol'\]; NewtonOptions takes"):
+        ngtmc.Simulation(sc, 0.01, newton={"tol": 1e-8})
+    with pytest.raises(TypeError, match="newton must be an ngtmc.NewtonOptions"):
+        ngtmc.Simulation(sc, 0.01, newton=1e-8)
+    assert ngtmc.Simulation(sc, 0.01, newton={"rtol": 1e-9}).solver.newton.rtol == 1e-9
+
+
+def test_the_peak_of_a_negative_loading_is_its_most_negative_force():
+    """A compression (final load -0.01 mm) reported its peak as the 0 N of its start before."""
+    from scenes import tension_bar
+    res = ngtmc.simulate(tension_bar(fracture=False), -0.01)
+    assert res.peak_load == pytest.approx(-0.01)
+    assert res.peak_force == pytest.approx(res.history["force"].min()) and res.peak_force < -1.0
