@@ -25,7 +25,7 @@ import sys
 import time
 from typing import Callable, Sequence
 
-__all__ = ["Plugin", "Progress", "SnapshotOutput", "CheckpointOutput", "RowCallbacks", "ReportOutput", "force_unit"]
+__all__ = ["emit", "Plugin", "Progress", "SnapshotOutput", "CheckpointOutput", "RowCallbacks", "ReportOutput", "force_unit"]
 
 
 def force_unit(dim: int, thickness: float | None) -> str:
@@ -48,6 +48,19 @@ class Plugin:
 
     def __call__(self, sim, row: dict):
         self.step(sim, row)
+
+
+def emit(text: str):
+    """Print a line on stderr. Where stderr is a pipe whose reader has gone (``ngtmc run ... 2>&1 |
+    head -3``), the line is dropped and stderr goes to the null device for the rest of the process:
+    a closed pipe ends the printing, never the run (it used to be recorded as failed)."""
+    try:
+        print(text, file=sys.stderr, flush=True)
+    except BrokenPipeError:
+        import os
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stderr.fileno())
+        os.close(null)
 
 
 class Progress(Plugin):
@@ -93,7 +106,7 @@ class Progress(Plugin):
 
     def say(self, text: str):
         if self.enabled is True:
-            print(f"{self.prefix} {text}", file=sys.stderr, flush=True)
+            emit(f"{self.prefix} {text}")
 
     def time_left(self, elapsed: float, t: float, total: float) -> tuple[float, float] | None:
         """``(seconds left, seconds of the pace window)`` from the recent pace, or None."""
@@ -165,7 +178,7 @@ class Progress(Plugin):
             self.furthest = max(self.furthest, sim.t / total if total > 0 else 1.0)
             return
         self.last = now
-        print(self.line(sim, row), file=sys.stderr, flush=True)
+        emit(self.line(sim, row))
 
 
 class SnapshotOutput(Plugin):
@@ -238,12 +251,12 @@ class ReportOutput(Plugin):
             msg = f"report not rendered: ngtmc.report.render_report is not available ({e})"
             if strict:
                 raise RuntimeError(msg) from e
-            print(f"[ngtmc] {msg}", file=sys.stderr)
+            emit(f"[ngtmc] {msg}")
             return None
         try:
             self.path = render_report(self.out)
         except Exception as e:
             if strict:
                 raise
-            print(f"[ngtmc] report not rendered: {type(e).__name__}: {e}", file=sys.stderr)
+            emit(f"[ngtmc] report not rendered: {type(e).__name__}: {e}")
         return self.path

@@ -150,6 +150,9 @@ def simulation_options(p: dict) -> dict:
         raise StudyError(f"h_crack = {h_crack!r} must be a length in mm (0: no adaptive refinement)") from None
     if h_crack < 0 or h_crack != h_crack:
         raise StudyError(f"h_crack = {h_crack!r} mm must be >= 0 (0: no adaptive refinement)")
+    corridor = p.get("amr_corridor", SOLVER_PARAMETERS["amr_corridor"][0])
+    if isinstance(corridor, str) and corridor != "auto":   # checked whether refinement is on or not
+        raise StudyError(f"amr_corridor = {corridor!r} must be 'auto' or a half width in mm (0: none)")
     if h_crack > 0:
         from .adapt import Adaptivity
         try:

@@ -40,6 +40,9 @@ def notch_width(p: dict) -> float:
 
 def check_geometry(p: dict):
     """Raise ValueError if the sizes of ``p`` cannot make the mesh of ``p["loading"]``."""
+    for key, value in p.items():   # the mesh sizes (h_crack, the adaptive target, may be 0: none)
+        if key.startswith("h_") and key != "h_crack" and not float(value) > 0:
+            raise ValueError(f"three_point_bending geometry: the mesh size {key} = {value!r} mm must be > 0")
     L = float(p["beam_length"])
     nw, bw = notch_width(p), float(p["band_half_width"])
     sl, zs = float(p["support_length"]), float(p["support_zone"])

@@ -96,3 +96,31 @@ def test_a_study_file_that_breaks_its_contract_is_refused_and_leaves_no_folder(t
         run_study(str(f), output=tmp_path / "out", progress=False)
     assert words in str(err.value)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_closed_pipe_ends_the_printing_not_the_run(tmp_path):
+    """``ngtmc run ... 2>&1 | head -2``: the reader goes away after two lines; the run completes
+    (it used to be recorded as failed on the BrokenPipeError)."""
+    f = tmp_path / "my_study.py"
+    f.write_text(STUDY_FILE.format(tests=str(Path(__file__).parent)))
+    out = tmp_path / "run"
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).parents[1]))
+    proc = subprocess.Popen([sys.executable, "-m", "ngtmc", "run", str(f), "-o", str(out), "--threads", "1",
+                             "--no-vtk", "--set", "final_load=0.05"], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, env=env)
+    proc.stderr.readline()
+    proc.stderr.readline()
+    proc.stderr.close()
+    proc.wait(timeout=300)
+    assert json.loads((out / "metadata.json").read_text())["status"] == "completed"
+
+
+@pytest.mark.parametrize("override, words", [({"h_band": 0}, "the mesh size h_band = 0"),
+                                              ({"amr_corridor": "wide"}, "amr_corridor = 'wide' must be 'auto'")])
+def test_study_settings_are_checked_whether_or_not_they_act(tmp_path, override, words):
+    """A mesh size of 0 (netgen's CalcLU failed) and a corridor word while refinement is off are
+    refused, naming the setting, before any folder exists."""
+    from ngtmc.runner import run_study
+    with pytest.raises(StudyError, match=words):
+        run_study("three-point-bending", "quick", tmp_path / "out", overrides=override, progress=False)
+    assert not (tmp_path / "out").exists()

@@ -257,8 +257,8 @@ def _execute(name, resolution, output, overrides, report, resume, progress, thre
 
 def _say(message: str):
     """A line of the run's own (before its progress printer exists), on stderr."""
-    import sys
-    print(f"[ngtmc] {message}", file=sys.stderr, flush=True)
+    from ..plugins import emit
+    emit(f"[ngtmc] {message}")
 
 
 def _claimed(mod, res, p, out, typed, comm, root, meta, resume, report, progress, threads, auto, parallel,
