@@ -43,6 +43,7 @@ from .materials import Material  # noqa: E402
 from .conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
 from .scene import ElementWarning, Regulariser, ResolutionWarning, Scene  # noqa: E402
 from .scene_scale import ScaleWarning  # noqa: E402
+from .gmsh import read_gmsh  # noqa: E402
 from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate  # noqa: E402
 from .solver import NewtonOptions, Solver  # noqa: E402
 from .stepping import AdaptiveStepControl, Schedule  # noqa: E402
@@ -58,6 +59,7 @@ __all__ = [
     "ResolutionWarning", "ElementWarning", "ScaleWarning",
     "Solver", "NewtonOptions", "Simulation", "SimulationResult", "StepFailure", "simulate",
     "HISTORY_UNITS", "Schedule", "AdaptiveStepControl", "Adaptivity", "extrude", "distributed", "distribute",
+    "read_gmsh",
     "__version__",
 ]
 
