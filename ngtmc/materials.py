@@ -87,6 +87,9 @@ def _check_positive(name: str, value, unit: str):
     v = float(value)
     if not math.isfinite(v) or v <= 0.0:
         raise ValueError(f"parameter {name} = {value!r} {unit} is outside the allowed range: it must be finite and > 0")
+    if not (1e-100 <= v <= 1e100):   # products and quotients of such numbers leave double precision
+        raise ValueError(f"parameter {name} = {value!r} {unit} is outside the range the solver can represent "
+                         "(1e-100 to 1e100); are its units mm, N, MPa?")
 
 
 def deformation_gradient(u) -> ngs.CoefficientFunction:
