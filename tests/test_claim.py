@@ -124,3 +124,22 @@ def test_study_settings_are_checked_whether_or_not_they_act(tmp_path, override, 
     with pytest.raises(StudyError, match=words):
         run_study("three-point-bending", "quick", tmp_path / "out", overrides=override, progress=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_resume_names_a_missing_paraview_file_and_a_missing_metadata(tmp_path):
+    """A completed run whose ParaView file and metadata.json were lost (a full disk, a hand): the
+    resume says so, naming each, instead of going on silently."""
+    from ngtmc.runner import run_study
+    f = tmp_path / "my_study.py"
+    f.write_text(STUDY_FILE.format(tests=str(Path(__file__).parent)))
+    out = tmp_path / "run"
+    run_study(str(f), output=out, progress=False, report=False, overrides={"final_load": 0.002})
+    vtus = sorted((out / "vtk").glob("*.vtu"))
+    assert vtus
+    vtus[0].unlink()
+    (out / "metadata.json").unlink()
+    with pytest.warns(UserWarning) as rec:
+        run_study(str(f), output=out, progress=False, report=False, resume=True, overrides={"final_load": 0.002})
+    text = " ".join(str(w.message) for w in rec)
+    assert "metadata.json is missing" in text
+    assert vtus[0].name in text and "lists files that are not there" in text

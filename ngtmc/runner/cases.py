@@ -58,11 +58,16 @@ class _Run(RunFolder):
         checkpoint that the recorded metadata calls completed is taken from history.csv (and
         snapshots.npz); any other case without one is re-run from the start."""
         recorded = (meta or {}).get("results") or {}
+        if meta is None:
+            warnings.warn(f"{self.out / 'metadata.json'} is missing or unreadable: the run resumes from its "
+                          "checkpoints alone, and its wall time counts only the time they recorded", UserWarning,
+                          stacklevel=3)
         old_hist = old_snaps = None
         for case in self.cases:
             ck = self.load_checkpoint(case)
             if ck is not None and ck["done"]:
                 self.adopt(case, ck)
+                self._warn_missing_vtk(case)
             elif ck is not None:
                 self.resume_from[case.name] = ck
                 # kept in the files until the case goes on, so that no failure before then loses them
@@ -88,6 +93,19 @@ class _Run(RunFolder):
                     self.save_checkpoint(case, {"rows": ck["rows"]}, None, done=True)
                     self.progress.say(f"case {case.name}: no readable checkpoint; its completed results are "
                                       "taken from history.csv and metadata.json")
+
+    def _warn_missing_vtk(self, case):
+        """A completed case taken over on resume: warn naming each ParaView file its series lists
+        that is not on disk (a run that failed while writing them, a disk that was full)."""
+        import re
+        pvd = self.out / "vtk" / f"{case.name}.pvd"
+        if not self.vtk or not pvd.is_file():
+            return
+        missing = [f for f in re.findall(r'file="([^"]+)"', pvd.read_text()) if not (pvd.parent / f).is_file()]
+        if missing:
+            warnings.warn(f"case {case.name} is completed, but its ParaView series {pvd} lists files that are not "
+                          f"there: {', '.join(missing)} (run the case again into a new folder to have them)",
+                          UserWarning, stacklevel=3)
 
     def _recorded_files(self):
         run_folder = self.store.folder.parent  # also on the MPI ranks that write into a scratch folder
