@@ -143,3 +143,19 @@ def test_a_resume_names_a_missing_paraview_file_and_a_missing_metadata(tmp_path)
     text = " ".join(str(w.message) for w in rec)
     assert "metadata.json is missing" in text
     assert vtus[0].name in text and "lists files that are not there" in text
+
+
+def test_a_scheduler_that_does_not_answer_is_refused_at_once(tmp_path):
+    """A Dask scheduler address where nothing listens (a loopback port) is refused in seconds,
+    before any folder exists (it hung 60 s, printed a traceback and left a failed folder)."""
+    pytest.importorskip("distributed")
+    from ngtmc.runner import run_study
+    f = tmp_path / "my_study.py"
+    f.write_text(STUDY_FILE.format(tests=str(Path(__file__).parent)))
+    t0 = time.perf_counter()
+    with pytest.raises(StudyError, match="no Dask scheduler answers at tcp://127.0.0.1:1"):
+        run_study(str(f), output=tmp_path / "out", progress=False, scheduler="tcp://127.0.0.1:1")
+    assert time.perf_counter() - t0 < 30
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(StudyError, match="is not an address host:port"):
+        run_study(str(f), output=tmp_path / "out", progress=False, scheduler="tcp://localhost")

@@ -66,6 +66,35 @@ def check_settings(workers, scheduler):
         raise StudyError(f"scheduler = {scheduler!r} is not allowed: give the address of a Dask scheduler, "
                          "e.g. tcp://10.0.0.1:8786")
     require_dask()
+    if scheduler is not None:
+        _check_reachable(scheduler.strip())
+
+
+#: Seconds a scheduler has to accept a connection before the run is refused.
+SCHEDULER_TIMEOUT = 5.0
+
+
+def _check_reachable(address: str):
+    """Refuse, before any folder exists, a scheduler address that is malformed or where nothing
+    accepts a connection within SCHEDULER_TIMEOUT (a bad address hung 60 s and left a failed
+    folder). tcp:// addresses (and bare host:port) are tried; other protocols are left to Dask."""
+    import socket
+    from urllib.parse import urlsplit
+    url = urlsplit(address if "://" in address else "tcp://" + address)
+    if url.scheme != "tcp":
+        return
+    try:
+        host, port = url.hostname, url.port
+    except ValueError:
+        host, port = None, None
+    if not host or not port:
+        raise StudyError(f"scheduler = {address!r} is not an address host:port, e.g. tcp://10.0.0.1:8786")
+    try:
+        with socket.create_connection((host, port), timeout=SCHEDULER_TIMEOUT):
+            pass
+    except OSError as e:
+        raise StudyError(f"no Dask scheduler answers at {address} ({e.strerror or e}); start one "
+                         f"(dask scheduler) or check the address") from None
 
 
 @contextlib.contextmanager
