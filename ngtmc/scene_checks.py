@@ -69,6 +69,7 @@ def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
         raise TypeError(f"Scene.order must be an integer 1..4 or None, got {type(scene.order).__name__} {scene.order!r}")
     regions = set(mesh.GetMaterials())
     boundaries = set(mesh.GetBoundaries())
+    _check_mesh(mesh)
     _check_patterns(scene, regions)
     p, k = scene.displacement_order, mesh.GetCurveOrder()
     if k > p:
@@ -128,6 +129,22 @@ def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
     if scene.has_fracture:
         _check_resolution(scene, refine_to)
     return scene
+
+
+def _check_mesh(mesh):
+    """What a mesh would lose or break on: elements of zero (or negative) size, named by number and
+    region (a degenerate or inverted element makes J <= 0 before any load). Serial meshes only."""
+    if mesh.comm.size > 1:
+        return
+    vol = np.asarray(ngs.Integrate(ngs.CF(1.0), mesh, element_wise=True), dtype=float).ravel()
+    if vol.size == 0:
+        return
+    tiny = np.flatnonzero(~(vol > 1e-12 * float(np.max(np.abs(vol)))))
+    if tiny.size:
+        els = list(mesh.Elements(ngs.VOL))
+        named = ", ".join(f"{i} ({els[i].mat}, {vol[i]:.3g})" for i in tiny[:5])
+        raise ValueError(f"Scene.mesh has {tiny.size} element(s) of zero or negative size (mm^{mesh.dim}): {named}"
+                         f"{' ...' if tiny.size > 5 else ''}; a degenerate or inverted element cannot be solved on")
 
 
 def _check_conditions(scene: Scene, need_boundary):

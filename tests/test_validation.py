@@ -165,3 +165,19 @@ def test_the_peak_of_a_negative_loading_is_its_most_negative_force():
     res = ngtmc.simulate(tension_bar(fracture=False), -0.01)
     assert res.peak_load == pytest.approx(-0.01)
     assert res.peak_force == pytest.approx(res.history["force"].min()) and res.peak_force < -1.0
+
+
+def test_an_element_of_zero_size_is_refused_naming_it():
+    import netgen.meshing as nm
+    import ngsolve as ngs
+    m = nm.Mesh(dim=2)
+    p = [m.Add(nm.MeshPoint(nm.Pnt(x, y, 0))) for x, y in [(0, 0), (1, 0), (1, 1), (0, 1), (2, 0)]]
+    r = m.AddRegion("plate", dim=2)
+    for tri in ((0, 1, 2), (0, 2, 3), (0, 1, 4)):          # the third is flat: zero area
+        m.Add(nm.Element2D(r, [p[i] for i in tri]))
+    for name, edge in (("left", (3, 0)), ("right", (1, 2))):
+        m.Add(nm.Element1D([p[i] for i in edge], index=m.AddRegion(name, dim=1)))
+    sc = ngtmc.Scene(ngs.Mesh(m), {"plate": ngtmc.Material(1000.0, 0.3)},
+                     supports=[ngtmc.Support("left", x=True, y=True)], load=ngtmc.DisplacementLoad("right", "x"))
+    with pytest.raises(ValueError, match=r"1 element\(s\) of zero or negative size \(mm\^2\): 2 \(plate, 0\)"):
+        sc.check()
