@@ -149,6 +149,7 @@ def reference_case(p) -> str:
 
 def cases(p: dict) -> list:
     kus, dus = _grid(p)
+    tpb.check_stop_load(p, study="step_control")
     stop = min(float(p["stop_load"]), float(p["final_load"]))
     q = dict(p)
     out = []

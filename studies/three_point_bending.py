@@ -510,7 +510,15 @@ def make_case(p: dict, name: str = "main", label: str | None = None, k_u: float 
     )
 
 
+def check_stop_load(p: dict, key: str = "stop_load", study: str = "three_point_bending"):
+    """StudyError unless 0 < stop_load <= final_load (a larger one was clamped without a word)."""
+    stop, final = float(p.get(key, p["final_load"])), float(p["final_load"])
+    if not 0.0 < stop <= final:
+        raise StudyError(f"{study}: {key} = {stop:g} mm must lie in (0, final_load = {final:g} mm]")
+
+
 def cases(p: dict) -> list[Case]:
+    check_stop_load(p)
     stop = min(float(p.get("stop_load", p["final_load"])), float(p["final_load"]))
     if p["scheme"] == "path-following":  # steps by dissipation: neither k_u nor du_max sets them
         label = "this model (path following)"

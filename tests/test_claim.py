@@ -116,10 +116,12 @@ def test_a_closed_pipe_ends_the_printing_not_the_run(tmp_path):
 
 
 @pytest.mark.parametrize("override, words", [({"h_band": 0}, "the mesh size h_band = 0"),
-                                              ({"amr_corridor": "wide"}, "amr_corridor = 'wide' must be 'auto'")])
+                                              ({"amr_corridor": "wide"}, "amr_corridor = 'wide' must be 'auto'"),
+                                              ({"stop_load": 0.5}, r"stop_load = 0.5 mm must lie in \(0, final_load")])
 def test_study_settings_are_checked_whether_or_not_they_act(tmp_path, override, words):
-    """A mesh size of 0 (netgen's CalcLU failed) and a corridor word while refinement is off are
-    refused, naming the setting, before any folder exists."""
+    """A mesh size of 0 (netgen's CalcLU failed), a corridor word while refinement is off and a
+    stop_load past the final load (clamped without a word) are refused, naming the setting, before
+    any folder exists."""
     from ngtmc.runner import run_study
     with pytest.raises(StudyError, match=words):
         run_study("three-point-bending", "quick", tmp_path / "out", overrides=override, progress=False)
