@@ -78,6 +78,10 @@ from ngtmc.study import Case
 
 NAME = "contact_gamma0"
 TITLE = "Contact benchmark: influence of the void stiffness gamma0"
+#: What the report shows besides its sections: the force on a log scale too (the parasitic force
+#: before contact spans decades of gamma0), the rules gamma(rho) and Gc(rho), and no speed
+#: against error (the cases differ in physics, not in settings).
+REPORT = {"force_log_scale": True, "interpolation": True, "speed_against_error": False}
 SUMMARY = (
     "Two parallel 10 x 1 mm cantilevers, 0.15 mm apart, the upper one pushed down at its tip to 0.3 mm "
     "through a third-medium void (rho = 0) filling the gap, for gamma0 = 1e-4 ... 1e-7. Before contact "

@@ -176,6 +176,9 @@ def write_run(path, study: str = "three_point_bending", cases=None, status: str 
     ref_x = np.linspace(0, 0.09, 10) + GAP
     meta = {
         "study": study,
+        # what the study declares for its report (studies/contact_gamma0.py REPORT)
+        **({"report": {"force_log_scale": True, "interpolation": True, "speed_against_error": False}}
+           if study == "contact_gamma0" else {}),
         "title": {"three_point_bending": "Three-point bending with an indenter",
                   "contact_gamma0": "Contact through the third medium: effect of gamma0"}.get(
                       study, study.replace("_", " ")),

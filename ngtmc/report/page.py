@@ -171,7 +171,10 @@ def render_report(run_dir, output=None) -> Path:
     any other host). Sections: header and parameters, force against displacement with the
     references, key numbers, step history, phase-field snapshots on the deformed mesh (3D: on
     the deformed surface, and in the section plane when recorded; :mod:`.figures3d`), density
-    and mesh, energies, speed against error, and for ``contact_gamma0`` the interpolation rules.
+    and mesh, energies, speed against error; and what the study declares in its ``REPORT``
+    (recorded as ``metadata["report"]``): ``force_log_scale`` (the force also on a log scale),
+    ``interpolation`` (the rules gamma(rho) and Gc(rho) over the cases' parameters) and
+    ``speed_against_error`` (False: the cases are no variants of one another's settings).
     """
     run_dir = Path(run_dir)
     meta, history, snapshots = load_run(run_dir)
@@ -179,13 +182,13 @@ def render_report(run_dir, output=None) -> Path:
     styles = _case_style(cases)
     fu = meta.get("force_unit") or "N"
     per_thickness = thickness_phrase(meta.get("thickness_mm"))
-    study = str(meta.get("study", ""))
+    shows = dict(meta.get("report") or {})     # the study's declared flags, never its name
     has_hist = bool(len(history)) and history["load"].notna().any()
     features = run_features(meta, history, snapshots)
 
     figs: dict[str, dict] = {}
     figs["fig-force"] = _fig_force(meta, history, cases, styles)
-    if study == "contact_gamma0":
+    if shows.get("force_log_scale"):
         figs["fig-force-log"] = _fig_force(meta, history, cases, styles, log_y=True)
     figs["fig-step-size"] = _fig_step_size(history, cases, styles)
     if features["fracture"]:
@@ -201,7 +204,7 @@ def render_report(run_dir, output=None) -> Path:
     study_tables = _study_tables(meta)
 
     interp = None
-    if study == "contact_gamma0":
+    if shows.get("interpolation"):
         f1, f2, info = _fig_interpolation(meta, cases)
         figs["fig-gamma"] = f1
         if features["fracture"]:       # Gc(rho) matters only where something may break
@@ -209,7 +212,7 @@ def render_report(run_dir, output=None) -> Path:
         interp = dict(info, gc=features["fracture"])
 
     speed = _run_speed_entries(meta, history, cases) if len(cases) >= 2 else []
-    speed_meaningful = len(speed) >= 2 and study != "contact_gamma0"
+    speed_meaningful = len(speed) >= 2 and shows.get("speed_against_error", True)
     if speed_meaningful:
         figs["fig-speed-error"] = _fig_speed_error(
             speed, "Wall time against error in peak force (cases of this run)", "steps")
@@ -296,7 +299,7 @@ def render_report(run_dir, output=None) -> Path:
             cn["ref_diffs"].append({"force": _pct(d), "load": _pct(dl)})
 
     ctx = {
-        "meta": meta, "study": study, "title": meta.get("title") or study,
+        "meta": meta, "study": str(meta.get("study", "")), "title": meta.get("title") or str(meta.get("study", "")),
         "summary": meta.get("summary_text") or "", "resolution": meta.get("resolution") or "–",
         "created": fmt_date(created), "status": meta.get("status"),
         "banner": _status_banner(meta.get("status")),

@@ -194,6 +194,8 @@ class RunFolder:
             meta["figures"] = figures
         if self.features:
             meta["features"] = dict(self.features)
+        if getattr(mod, "REPORT", None):   # what the report shows besides its sections (docs/study-interface.md)
+            meta["report"] = dict(mod.REPORT)
         if self.parallel:
             meta["parallel"] = dict(self.parallel)
         if self.comm is not None:
