@@ -42,7 +42,7 @@ import ngsolve as ngs
 from .materials import Material, deformation_gradient, psi_dev, psi_vol
 from .conditions import DisplacementLoad, Support
 from .stepping import Schedule
-from .displacement_newton import lifted_direction, residual_split
+from .displacement_newton import equilibrium_scale, lifted_direction, meets, residual_split
 
 __all__ = ["PenaltyContact", "ContactResult", "penalty_sweep"]
 
@@ -198,7 +198,7 @@ class PenaltyContact:
         u = self.u.vec
         r, du, u0 = self._r, self._du, self._u0
         target = np.where(self._dir, load * self._e, 0.0)
-        r_ref = 0.0
+        moved = self._e != 0.0     # the loaded dofs: their reaction is the equilibrium scale
         res = math.inf
         for it in range(self.max_iterations + 1):
             self._update_pairs()
@@ -207,9 +207,8 @@ class PenaltyContact:
             if not math.isfinite(res):
                 return ContactResult(False, it, res, "residual is not finite")
             if not lifted:
-                if r_ref == 0.0:
-                    r_ref = res
-                if res <= self.rtol * max(reac, r_ref) + self.atol:
+                scale = equilibrium_scale(float(np.linalg.norm(r.FV().NumPy()[moved])))
+                if meets(res, scale, self.rtol, self.atol):
                     self.load = load
                     return ContactResult(True, it, res)
             if it == self.max_iterations:
