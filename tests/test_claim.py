@@ -130,21 +130,26 @@ def test_study_settings_are_checked_whether_or_not_they_act(tmp_path, override, 
 
 def test_a_resume_names_a_missing_paraview_file_and_a_missing_metadata(tmp_path):
     """A completed run whose ParaView file and metadata.json were lost (a full disk, a hand): the
-    resume says so, naming each, instead of going on silently."""
+    resume says so, naming each, instead of going on silently, and its wall time carries over
+    from the checkpoints."""
     from ngtmc.runner import run_study
     f = tmp_path / "my_study.py"
     f.write_text(STUDY_FILE.format(tests=str(Path(__file__).parent)))
     out = tmp_path / "run"
-    run_study(str(f), output=out, progress=False, report=False, overrides={"final_load": 0.002})
+    run_study(str(f), output=out, progress=False, report=False, overrides={"final_load": 0.05})
+    import pandas as pd
+    solved = float(pd.read_csv(out / "history.csv")["wall_time"].max())   # s, the case's own time
     vtus = sorted((out / "vtk").glob("*.vtu"))
     assert vtus
     vtus[0].unlink()
     (out / "metadata.json").unlink()
     with pytest.warns(UserWarning) as rec:
-        run_study(str(f), output=out, progress=False, report=False, resume=True, overrides={"final_load": 0.002})
+        run_study(str(f), output=out, progress=False, report=False, resume=True, overrides={"final_load": 0.05})
     text = " ".join(str(w.message) for w in rec)
     assert "metadata.json is missing" in text
     assert vtus[0].name in text and "lists files that are not there" in text
+    # the wall time carries over from the checkpoints' latest row (it restarted from 0 before)
+    assert json.loads((out / "metadata.json").read_text())["wall_time_s"] >= solved
 
 
 def test_a_scheduler_that_does_not_answer_is_refused_at_once(tmp_path):

@@ -60,7 +60,7 @@ class _Run(RunFolder):
         recorded = (meta or {}).get("results") or {}
         if meta is None:
             warnings.warn(f"{self.out / 'metadata.json'} is missing or unreadable: the run resumes from its "
-                          "checkpoints alone, and its wall time counts only the time they recorded", UserWarning,
+                          "checkpoints alone, its wall time from the latest one they recorded", UserWarning,
                           stacklevel=3)
         old_hist = old_snaps = None
         for case in self.cases:
@@ -320,6 +320,9 @@ class _Run(RunFolder):
                 self.created = meta.get("created", self.created)
             except (TypeError, ValueError):
                 pass
+        elif resume:   # metadata.json lost: the time so far is the latest wall time the checkpoints recorded
+            times = [float(r.get("wall_time", 0.0) or 0.0) for rows in self.rows.values() for r in rows]
+            self.wall_before = max([t for t in times if t == t] + [0.0])
         self.out.mkdir(parents=True, exist_ok=True)
         self.write_metadata()
         try:
