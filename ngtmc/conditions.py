@@ -96,6 +96,11 @@ class Support:
     y: bool = False
     z: bool = False
 
+    def __post_init__(self):
+        for c in "xyz":
+            if not isinstance(getattr(self, c), (bool, np.bool_)):
+                raise TypeError(f"Support on {_where(self.boundary)}: {c} = {getattr(self, c)!r} must be True or False")
+
     def components(self) -> list[int]:
         return [i for i, held in enumerate((self.x, self.y, self.z)) if held]
 
@@ -124,8 +129,11 @@ class DisplacementLoad:
     name: str | None = None
 
     def __post_init__(self):
-        if self.direction not in _DIRECTIONS:
+        if not isinstance(self.direction, str) or self.direction not in _DIRECTIONS:
             raise ValueError(f"DisplacementLoad direction = {self.direction!r} is not one of {sorted(_DIRECTIONS)}")
+        if not isinstance(self.hold_tangential, (bool, np.bool_)):
+            raise TypeError(f"DisplacementLoad on {_where(self.boundary)}: hold_tangential = {self.hold_tangential!r} "
+                            "must be True or False")
 
     @property
     def component(self) -> int:
@@ -271,10 +279,11 @@ class Traction:
             if t.dim != dim:
                 raise ValueError(f"{where}: the traction has {t.dim} components; the mesh is {dim}D")
             return t
-        try:
-            arr = np.asarray(t, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"{where}: traction = {t!r} must be {dim} numbers (MPa) or a CoefficientFunction") from None
+        import numbers
+        seq = t if isinstance(t, (list, tuple, np.ndarray)) else None
+        if seq is None or not all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in np.ravel(seq)):
+            raise ValueError(f"{where}: traction = {t!r} must be {dim} numbers (MPa) or a CoefficientFunction")
+        arr = np.asarray(t, dtype=float)
         if arr.shape != (dim,):
             raise ValueError(f"{where}: traction has shape {arr.shape}; expected ({dim},) for a {dim}D mesh")
         if not np.all(np.isfinite(arr)):

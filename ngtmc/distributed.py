@@ -39,7 +39,8 @@ __all__ = ["Ranks", "distribute", "is_distributed", "check_supported"]
 
 def is_distributed(mesh) -> bool:
     """True when ``mesh`` (an ngsolve.Mesh) is spread over more than one MPI rank."""
-    return mesh.comm.size > 1
+    comm = getattr(mesh, "comm", None)    # not a mesh at all: Scene.check names it
+    return comm is not None and comm.size > 1
 
 
 class Ranks:

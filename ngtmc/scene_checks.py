@@ -63,8 +63,13 @@ def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
                          "2D (plane strain) meshes only; leave it unset (None) in 3D")
     for name, unit in (("gamma0", "dimensionless"), ("gc_a", "dimensionless"), ("gc_b", "dimensionless"),
                        ("residual_stiffness", "dimensionless"), ("thickness", "mm")):
-        if getattr(scene, name) is not None:
+        if getattr(scene, name) is not None or name != "thickness":   # only thickness may be None (1 mm in 2D)
             check_number(f"Scene.{name}", getattr(scene, name), unit)
+    if 0.0 < float(scene.gamma0) < 1e-12:
+        raise ValueError(f"Scene.gamma0 = {scene.gamma0!r} is below 1e-12: the void's stiffness would be lost in "
+                         "round-off against the solid's (the studies use 1e-7 to 1e-4)")
+    if scene.thickness is not None and not float(scene.thickness) <= 1e100:
+        raise ValueError(f"Scene.thickness = {scene.thickness!r} mm is outside the range the solver can represent")
     if scene.order is not None and (isinstance(scene.order, bool) or not isinstance(scene.order, (int, np.integer))):
         raise TypeError(f"Scene.order must be an integer 1..4 or None, got {type(scene.order).__name__} {scene.order!r}")
     regions = set(mesh.GetMaterials())

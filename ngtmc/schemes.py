@@ -108,6 +108,11 @@ def _add(info: dict, res):
     info["assembly_time"] += res.assembly_time
 
 
+#: The keys of ``Simulation(coupled=...)`` that reach :class:`ngtmc.coupled.CoupledNewton`.
+_COUPLED_KEYS = ("alpha_tol", "max_iterations", "linear_solver", "gmres_rtol", "gmres_maxsteps", "weak_stop",
+                 "factor_reuse")
+
+
 class StepSchemes:
     """The solution scheme of a run's load steps (a base of :class:`ngtmc.simulation.Simulation`,
     whose docstring lists the options). Needs ``self.solver`` (:class:`ngtmc.solver.Solver`) and
@@ -120,6 +125,8 @@ class StepSchemes:
         """Raise ValueError for an unknown ``scheme`` or a ``staggered_tol`` that is not > 0."""
         if scheme not in SCHEMES:
             raise ValueError(f"scheme = {scheme!r} is not one of {', '.join(map(repr, SCHEMES))}")
+        from .materials import check_number
+        check_number("staggered_tol", staggered_tol, "dimensionless")
         if not (staggered_tol > 0):
             raise ValueError(f"staggered_tol = {staggered_tol!r} must be > 0")
 
@@ -129,6 +136,8 @@ class StepSchemes:
         schedule = self.schedule
         self.scheme = scheme
         self.staggered_tol = float(staggered_tol)
+        if isinstance(max_staggered, bool) or not isinstance(max_staggered, int) or max_staggered < 1:
+            raise ValueError(f"max_staggered = {max_staggered!r} must be an integer >= 1 (passes of the staggered scheme)")
         self.max_staggered = int(max_staggered)
         self.coupled = None
         if coupled is not None and not isinstance(coupled, dict):
@@ -162,6 +171,12 @@ class StepSchemes:
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
         self._coupled_options = dict(copt)
+        if "linear_solver" in copt or "gmres_rtol" in copt:   # checked whether the scheme uses them or not
+            from .coupled_linear import CoupledLinearSolver
+            CoupledLinearSolver.check(copt.get("linear_solver", "block-gmres"), copt.get("gmres_rtol", 1e-8))
+        unknown = sorted(set(copt) - set(_COUPLED_KEYS))
+        if unknown:
+            raise ValueError(f"coupled: unknown option(s) {unknown}; the coupled options are {', '.join(_COUPLED_KEYS)}")
         #: the displacement and load (mm) of the accepted state before the last one, and the
         #: mesh generation they belong to, for :meth:`_predict_displacement` (None: no such state)
         self._u_before = None

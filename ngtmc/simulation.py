@@ -191,6 +191,8 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
         self.schedule = schedule
         self.control = control
         self.progress = progress
+        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
+            raise ValueError(f"max_steps = {max_steps!r} must be an integer >= 1 (a safety limit on accepted steps)")
         self.max_steps = int(max_steps)
         if stop_after_drop is not None:
             check_stop_after_drop(stop_after_drop, schedule)

@@ -122,6 +122,8 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         #: number of times the mesh changed under this solver (:meth:`mesh_changed`, adaptive refinement)
         self.mesh_generation = 0
         self._apply_orders()
+        if not (compile in ("auto", "real") or isinstance(compile, bool)):
+            raise ValueError(f"compile = {compile!r} is not one of 'auto', 'real', True, False")
         if compile == "auto":  # C++ code generation pays off on larger meshes only
             ndof_u = self.fes_u.ParallelDofs().ndofglobal if self.ranks.parallel else self.fes_u.ndof
             big = self.ranks.sum(mesh.ne) >= AUTO_REAL_COMPILE_ELEMENTS or ndof_u >= AUTO_REAL_COMPILE_DOFS
