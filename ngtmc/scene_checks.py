@@ -249,6 +249,9 @@ def _check_shared_vertices(mesh, held: dict, moving: set):
             if key[1] not in on:
                 on[key[1]] = {v.nr for el in mesh.Elements(ngs.BND) if re.fullmatch(key[1], el.mat)
                               for v in el.vertices}
+                if not on[key[1]] and mesh.comm.size == 1:
+                    raise ValueError(f"{desc}: boundary {key[1]!r} is named in the mesh but no boundary element "
+                                     "carries it, so the condition would hold nothing")
             vs = on[key[1]]
         for v in vs:
             per_vertex.setdefault((v, c), []).append((desc, is_load))
