@@ -135,6 +135,7 @@ def cases():
         m = ngs.Mesh(__import__("netgen.occ", fromlist=["OCCGeometry"]).OCCGeometry(face, dim=2).GenerateMesh(maxh=1e-4))
         solve(scene(mesh=m, fracture_regions=()), 1e-6)
     add("body drawn in metres", metres, "metres", "size")
+    add("final load of 5 mm on a 1 mm bar", lambda: ngtmc.Simulation(scene(), 5.0), "load", "size")
     # -------------------------------------------------------------- simulation options
     for v in (float("nan"), "0.001", 0.0, [0.0, 0.0], None, [0.001, float("inf")]):
         add(f"schedule {v!r}", lambda v=v: ngtmc.simulate(scene(), v), "schedule", "Schedule")

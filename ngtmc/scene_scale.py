@@ -16,7 +16,9 @@ Plausible (the bounds are generous: a warning means "look again", not "wrong"):
   drawn in metres is 1e-3);
 * l0 of a fracture region: at most half of the region's bounding-box diagonal (an l0 of 100 mm on
   a 1 mm bar makes the phase field a constant);
-* a ``Point(near=...)``: within 10 % of the body's diagonal of the vertex it takes.
+* a ``Point(near=...)``: within 10 % of the body's diagonal of the vertex it takes;
+* a displacement load's largest value over the schedule: at most the body's diagonal (a load in
+  micrometres read as mm, or in mm on a body drawn in metres) (:func:`check_load_scale`).
 """
 from __future__ import annotations
 
@@ -26,7 +28,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["ScaleWarning", "check_scale", "E_RANGE", "GC_RANGE", "STRAIN_RANGE", "SIZE_RANGE", "L0_FRACTION",
+__all__ = ["ScaleWarning", "check_scale", "check_load_scale", "E_RANGE", "GC_RANGE", "STRAIN_RANGE", "SIZE_RANGE", "L0_FRACTION",
            "POINT_FRACTION"]
 
 #: Plausible ranges in mm, N, MPa (see the module docstring).
@@ -46,6 +48,25 @@ class ScaleWarning(UserWarning):
 def _warn(message: str):
     warnings.warn(message + " (ngtmc works in mm, N, MPa; Scene(scale_check=False) if this is meant)",
                   ScaleWarning, stacklevel=5)
+
+
+def check_load_scale(scene, loads) -> list[str]:
+    """Warn (:class:`ScaleWarning`) when the largest |load| of the schedule's points ``loads`` (mm)
+    exceeds the body's bounding-box diagonal while a displacement load drives the scene."""
+    if not getattr(scene, "scale_check", True):
+        return []
+    from .conditions import Traction
+    if all(isinstance(ld, Traction) for ld in scene.loads):
+        return []
+    pts = np.asarray(scene.mesh.ngmesh.Coordinates())[:, :scene.mesh.dim]
+    diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+    top = max(abs(float(x)) for x in loads)
+    if top > diag:
+        msg = (f"the schedule's largest load, {top:g} mm, is more than the body's size ({diag:.3g} mm): is the "
+               "load in mm and the body drawn in mm?")
+        _warn(msg)
+        return [msg]
+    return []
 
 
 def check_scale(scene) -> list[str]:

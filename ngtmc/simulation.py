@@ -198,7 +198,9 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
             check_stop_after_drop(stop_after_drop, schedule)
         self.stop_after_drop = stop_after_drop
         self._solver_options = dict(newton=newton, compile=compile, refine_to=None if adapt is None else adapt.h_crack)
-        self.solver = Solver(scene, **self._solver_options)
+        self.solver = Solver(scene, **self._solver_options)     # checks the scene first
+        from .scene_scale import check_load_scale
+        check_load_scale(scene, schedule.points)
         #: the size restrictions of a run refined by remeshing (:class:`ngtmc.remesh.Remesher`)
         self._remesher = None
         if adapt is not None:

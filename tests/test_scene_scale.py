@@ -58,3 +58,14 @@ def test_a_body_drawn_in_metres_and_a_point_far_away_are_named():
 def test_scale_check_must_be_a_bool():
     with pytest.raises(TypeError, match="scale_check"):
         dataclasses.replace(tension_bar(l0=0.1), scale_check="no").check()
+
+
+def test_a_load_larger_than_the_body_is_named():
+    """A final displacement of 5 mm on a bar of 1 mm (a load in micrometres read as mm, or a body
+    drawn in metres): a ScaleWarning naming the load; 1 mm on it passes."""
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        ngtmc.Simulation(tension_bar(l0=0.1), 5.0)
+        ngtmc.Simulation(tension_bar(l0=0.1), 1.0)
+    msgs = [str(r.message) for r in rec if issubclass(r.category, ngtmc.ScaleWarning)]
+    assert len(msgs) == 1 and "largest load, 5 mm, is more than the body's size" in msgs[0]
