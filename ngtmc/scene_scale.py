@@ -2,7 +2,7 @@
 units (E in Pa or GPa, a body drawn in metres, Gc in kN/mm) is accepted by every other check. Here
 each is compared with what is plausible in mm, N, MPa, and a :class:`ScaleWarning` names the
 parameter, its value and the range. ``Scene(scale_check=False)`` silences it for a scene whose
-numbers are meant.
+numbers are meant. A mesh distributed over MPI ranks is not checked (each rank holds a part).
 
 Plausible (the bounds are generous: a warning means "look again", not "wrong"):
 
@@ -53,7 +53,7 @@ def _warn(message: str):
 def check_load_scale(scene, loads) -> list[str]:
     """Warn (:class:`ScaleWarning`) when the largest |load| of the schedule's points ``loads`` (mm)
     exceeds the body's bounding-box diagonal while a displacement load drives the scene."""
-    if not getattr(scene, "scale_check", True):
+    if not getattr(scene, "scale_check", True) or scene.mesh.comm.size > 1:   # serial meshes (the sizes are global)
         return []
     from .conditions import Traction
     if all(isinstance(ld, Traction) for ld in scene.loads):
@@ -72,7 +72,7 @@ def check_load_scale(scene, loads) -> list[str]:
 def check_scale(scene) -> list[str]:
     """Warn (:class:`ScaleWarning`) for each number of ``scene`` outside its plausible range in mm,
     N, MPa; returns the messages (empty when all is plausible or ``scene.scale_check`` is False)."""
-    if not getattr(scene, "scale_check", True):
+    if not getattr(scene, "scale_check", True) or scene.mesh.comm.size > 1:   # serial meshes (the sizes are global)
         return []
     out = []
 
