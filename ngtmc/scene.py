@@ -23,6 +23,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import ngsolve as ngs
 
+from .regions import region_names
 from .conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: F401
 from .materials import Material, check_number
 from .splits import DEFAULT_FORMULATION, DEFAULT_SPLIT, check_split
@@ -84,12 +85,6 @@ class Regulariser:
             raise ValueError(f"Regulariser damping = {self.damping!r} is not one of 'none', 'exp'")
 
 
-def _names(spec) -> list[str]:
-    if spec is None:
-        return []
-    if isinstance(spec, str):
-        return [s for s in spec.split("|") if s]
-    return [s for item in spec for s in _names(item)]
 
 
 @dataclass
@@ -220,7 +215,7 @@ class Scene:
 
     @property
     def fracture_region_names(self) -> list[str]:
-        return _names(self.fracture_regions)
+        return region_names(self.fracture_regions)
 
     @property
     def has_fracture(self) -> bool:

@@ -22,7 +22,8 @@ import ngsolve as ngs
 
 from .conditions import LOAD_KINDS, DisplacementField, DisplacementLoad, Point, Support, Traction, _LETTERS, _where
 from .materials import Material, check_number
-from .scene import ResolutionWarning, Scene, _names
+from .regions import region_names
+from .scene import ResolutionWarning, Scene
 from .splits import check_split
 
 __all__ = ["check_scene"]
@@ -109,7 +110,7 @@ def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
     for r in scene.fracture_region_names:
         need_region(r, "Scene.fracture_regions")
     if scene.regulariser is not None:
-        for r in _names(scene.regulariser.regions):
+        for r in region_names(scene.regulariser.regions):
             need_region(r, "Scene.regulariser.regions")
         if scene.displacement_order < 2:
             raise ValueError(

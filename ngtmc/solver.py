@@ -34,7 +34,8 @@ from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOp
 from .distributed import Ranks
 from .discretisation import lower_order_outside
 from .conditions import Point, Support, Traction
-from .scene import Scene, _names
+from .regions import region_names
+from .scene import Scene
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
 
@@ -174,7 +175,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         # regions whose elements carry the full order p (all of them unless the order varies)
         high = set(regions) if p >= 2 else set()
         if self._variable_order:
-            high = {r for r in regions if re.fullmatch(_regex(_names(scene.regulariser.regions)), r)}
+            high = {r for r in regions if re.fullmatch(_regex(region_names(scene.regulariser.regions)), r)}
         self._high_re = _regex(sorted(r for r in others if r in high))
         self._low_re = _regex(sorted(r for r in others if r not in high))
         # the history lives at the order of the fracture regions' displacement
@@ -240,7 +241,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         refined = self.mesh_generation > 0
         if refined:
             self.fes_u.Update()
-        lower_order_outside(self.fes_u, self.mesh, _regex(_names(self.scene.regulariser.regions)),
+        lower_order_outside(self.fes_u, self.mesh, _regex(region_names(self.scene.regulariser.regions)),
                             order=self.order if refined else None)
         if refined:
             self.fes_u.Update()

@@ -22,7 +22,7 @@ import pandas as pd
 from ..plugins import force_unit
 from ..runfiles import (HISTORY_UNITS, CheckpointWarning, jsonable, parameters_hash, peak, physics_hash,
                         run_description, write_atomic, write_json, write_npz)
-from ..scene import _names
+from ..regions import region_names
 from .checkpoints import CheckpointStore
 from ..snapshots import Snapshots
 from ..study import Case, StudyError
@@ -58,7 +58,7 @@ def _mesh_info(solver, serial=None) -> dict:
         nd = solver.ndof
     return {"n_elements": int(mesh.ne), "n_vertices": int(mesh.nv), "ndof_u": int(nd["u"]),
             "ndof_alpha": int(nd["alpha"]), "h_min": float(np.min(h)), "h_max": float(np.max(h)),
-            "displacement_order": (f"{solver.order} in {', '.join(_names(solver.scene.regulariser.regions))}, 1 elsewhere"
+            "displacement_order": (f"{solver.order} in {', '.join(region_names(solver.scene.regulariser.regions))}, 1 elsewhere"
                                    if solver._variable_order else int(solver.order))}
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..runfiles import read_metadata
-from ..scene import _names
+from ..regions import region_names
 from ..study import Case, StudyError, normalise_name
 from .folder import _CONTROL_SETTINGS
 
@@ -72,7 +72,7 @@ def _scene_parameters(scene, schedule, control, options: dict) -> dict:
     out["residual_stiffness"] = (float(scene.residual_stiffness), "-", "added to the degradation g(alpha)")
     if scene.regulariser is not None:
         r = scene.regulariser
-        out["regulariser_regions"] = (", ".join(_names(r.regions)), "-", "regions of the contact regulariser")
+        out["regulariser_regions"] = (", ".join(region_names(r.regions)), "-", "regions of the contact regulariser")
         out["regulariser_length"] = (float(r.length), "mm", "characteristic length L of the regulariser")
         out["kbar_r"] = (float(r.kbar_r), "-", "regulariser factor")
         out["regulariser_damping"] = (str(r.damping), "-", "damping of the regulariser")
