@@ -20,13 +20,11 @@ from . import splits
 from .discretisation import bilinear_form, real_compile, term_rules
 from .energy_forms import _QuadraticPlus, merged_terms
 from .materials import deformation_gradient, psi_dev, psi_vol
-from .regions import region_names
+from .regions import regex, region_names
 
 __all__ = ["DisplacementEnergy"]
 
 
-def _regex(names):
-    return "|".join(names)
 
 
 class DisplacementEnergy:
@@ -83,7 +81,7 @@ class DisplacementEnergy:
         if reg is not None:
             k_r = creg.regularisation_stiffness(reg.kbar_r, reg.length, self.K0)
             phi = creg.phi_bar(u, k_r, indicator=1 - self.rho, damping=reg.damping)
-            terms.append(("regularisation", phi, _regex(region_names(reg.regions))))
+            terms.append(("regularisation", phi, regex(region_names(reg.regions))))
         return terms
 
     def energy_measure(self, name: str, regions: str):

@@ -17,13 +17,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-import re
 from typing import Mapping, Sequence
 
 import numpy as np
 import ngsolve as ngs
 
-from .regions import region_names
+from .regions import matches, region_names
 from .conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: F401
 from .materials import Material, check_number
 from .splits import DEFAULT_FORMULATION, DEFAULT_SPLIT, check_split
@@ -237,7 +236,7 @@ class Scene:
             mats = self.mesh.GetMaterials()
             idx = np.array([el.index for el in self.mesh.Elements(ngs.VOL)])
             for region, value in self.density.items():
-                ids = [i for i, m in enumerate(mats) if re.fullmatch(region, m)]
+                ids = [i for i, m in enumerate(mats) if matches(region, m)]
                 rho[np.isin(idx, ids)] = float(value)
             return rho
         rho = np.asarray(self.density, dtype=float).ravel()
@@ -262,7 +261,7 @@ class Scene:
 
     def material_of(self, region: str) -> Material:
         for k, m in self.materials.items():
-            if re.fullmatch(k, region):
+            if matches(k, region):
                 return m
         raise KeyError(region)
 

@@ -19,7 +19,6 @@ Units: mm, N, MPa. Forces and energies returned by this module are for the scene
 from __future__ import annotations
 
 import dataclasses
-import re
 
 import numpy as np
 import ngsolve as ngs
@@ -27,14 +26,14 @@ from ngsolve.comp import IntegrationRuleSpace
 
 from .materials import deformation_gradient, gamma_interpolation, gc_interpolation
 from .boundary_conditions import BoundaryConditions
-from .displacement_energy import DisplacementEnergy, _regex
+from .displacement_energy import DisplacementEnergy
 from .energy_forms import _ExternalWork
 from .phase_field import PhaseFieldHistory
 from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
 from .distributed import Ranks
 from .discretisation import lower_order_outside
 from .conditions import Point, Support, Traction
-from .regions import region_names
+from .regions import matches, regex, region_names
 from .scene import Scene
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
@@ -116,7 +115,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         kw = {}
         for c, key in zip(range(d), ("dirichletx", "dirichlety", "dirichletz")):
             if dirichlet[c]:
-                kw[key] = _regex(dirichlet[c])
+                kw[key] = regex(dirichlet[c])
         self.fes_u = ngs.VectorH1(mesh, order=p, **kw)
         self._variable_order = p >= 2 and scene.order is None and scene.variable_order and scene.regulariser is not None
         self._point_held = point_held   # (vertex, component): vertices keep their numbers in a refinement
@@ -170,16 +169,16 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
 
         frac = scene.fracture_region_names
         self.fracture_regions = frac
-        self._frac_re = _regex(frac)
-        others = sorted(r for r in set(regions) if not any(re.fullmatch(f, r) for f in frac))
+        self._frac_re = regex(frac)
+        others = sorted(r for r in set(regions) if not any(matches(f, r) for f in frac))
         # regions whose elements carry the full order p (all of them unless the order varies)
         high = set(regions) if p >= 2 else set()
         if self._variable_order:
-            high = {r for r in regions if re.fullmatch(_regex(region_names(scene.regulariser.regions)), r)}
-        self._high_re = _regex(sorted(r for r in others if r in high))
-        self._low_re = _regex(sorted(r for r in others if r not in high))
+            high = {r for r in regions if matches(regex(region_names(scene.regulariser.regions)), r)}
+        self._high_re = regex(sorted(r for r in others if r in high))
+        self._low_re = regex(sorted(r for r in others if r not in high))
         # the history lives at the order of the fracture regions' displacement
-        frac_high = bool(frac) and any(r in high for r in regions if re.fullmatch(self._frac_re, r))
+        frac_high = bool(frac) and any(r in high for r in regions if matches(self._frac_re, r))
         p_hist = p if (frac_high or not self._variable_order) else 1
 
         # ------------------------------------------------------------ history and phase field
@@ -241,7 +240,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         refined = self.mesh_generation > 0
         if refined:
             self.fes_u.Update()
-        lower_order_outside(self.fes_u, self.mesh, _regex(region_names(self.scene.regulariser.regions)),
+        lower_order_outside(self.fes_u, self.mesh, regex(region_names(self.scene.regulariser.regions)),
                             order=self.order if refined else None)
         if refined:
             self.fes_u.Update()
@@ -317,7 +316,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         mesh = self.mesh
         pts = np.asarray(mesh.ngmesh.Coordinates())[:mesh.nv]
         if self.alpha is not None:
-            pts = pts[sorted({v.nr for el in mesh.Elements(ngs.VOL) if re.fullmatch(self._frac_re, el.mat)
+            pts = pts[sorted({v.nr for el in mesh.Elements(ngs.VOL) if matches(self._frac_re, el.mat)
                               for v in el.vertices})]
         return self._box(pts)
 
