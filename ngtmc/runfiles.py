@@ -31,7 +31,7 @@ import numpy as np
 
 __all__ = ["SCHEMA_VERSION", "HISTORY_UNITS", "history_units", "CheckpointWarning", "write_atomic", "write_json", "write_npz",
            "jsonable", "peak", "peak_index", "UNITS", "versions", "git_revision", "parameter_table", "physics_hash",
-           "run_description", "parameters_hash", "process_info", "effective_status", "read_metadata",
+           "run_description", "parameters_hash", "process_info", "process_alive", "effective_status", "read_metadata",
            "resume_parameters"]
 
 #: Version of the run-folder format (``schema_version`` in metadata.json; absent means 1).
@@ -360,13 +360,12 @@ def process_info() -> dict:
     return {"pid": os.getpid(), "host": socket.gethostname()}
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid) -> bool:
+    """True when a process of id ``pid`` exists on this host (False for a pid that is not one)."""
     try:
         os.kill(int(pid), 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:      # exists, owned by someone else
-        return True
+    except (OSError, ValueError, TypeError) as e:   # PermissionError: it exists, owned by someone else
+        return isinstance(e, PermissionError)
     return True
 
 
@@ -380,7 +379,7 @@ def effective_status(meta: dict) -> tuple[str, str | None]:
         return status, None
     if proc["host"] != socket.gethostname():
         return status, f"started on host {proc['host']}, whose processes cannot be checked from here"
-    if _alive(proc["pid"]):
+    if process_alive(proc["pid"]):
         return status, f"process {proc['pid']} on {proc['host']} is alive"
     return "interrupted", (f"recorded as running, but its process {proc['pid']} on {proc['host']} is gone "
                            "(killed); resumable from its checkpoint")

@@ -12,9 +12,9 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-import socket
 import time
 
+from ..runfiles import process_alive, process_info
 from ..study import StudyError
 
 __all__ = ["CLAIM_FILE", "FolderInUse", "FolderClaim"]
@@ -25,18 +25,6 @@ CLAIM_FILE = ".ngtmc-claim.json"
 
 class FolderInUse(StudyError):
     """The run folder is claimed by another run that is still alive."""
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(int(pid), 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:      # exists, owned by someone else
-        return True
-    except (OSError, ValueError, TypeError):
-        return False
-    return True
 
 
 class FolderClaim:
@@ -66,7 +54,7 @@ class FolderClaim:
     def acquire(self):
         self._created = not self.folder.exists()
         self.folder.mkdir(parents=True, exist_ok=True)
-        me = {"pid": os.getpid(), "host": socket.gethostname(), "started": time.time()}
+        me = dict(process_info(), started=time.time())
         for _ in range(3):
             try:
                 fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
@@ -79,7 +67,7 @@ class FolderClaim:
                 if info.get("pid") == me["pid"] and same_host:
                     self._held = False            # this process holds it already (a nested run): leave it
                     return self
-                if info and (not same_host or _alive(info.get("pid"))):
+                if info and (not same_host or process_alive(info.get("pid"))):
                     where = "" if same_host else " (another host: its process cannot be checked from here)"
                     raise FolderInUse(f"{self.folder} is in use by another run: {self._describe(info)}{where}. "
                                       f"Choose another output folder, or wait for that run to end (if it is "
