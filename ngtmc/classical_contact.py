@@ -42,7 +42,7 @@ import ngsolve as ngs
 from .materials import Material, deformation_gradient, psi_dev, psi_vol
 from .conditions import DisplacementLoad, Support
 from .stepping import Schedule
-from .displacement_newton import equilibrium_scale, lifted_direction, meets, residual_split
+from .displacement_newton import lifted_direction, meets, residual_split
 
 __all__ = ["PenaltyContact", "ContactResult", "penalty_sweep"]
 
@@ -207,8 +207,7 @@ class PenaltyContact:
             if not math.isfinite(res):
                 return ContactResult(False, it, res, "residual is not finite")
             if not lifted:
-                scale = equilibrium_scale(float(np.linalg.norm(r.FV().NumPy()[moved])))
-                if meets(res, scale, self.rtol, self.atol):
+                if meets(res, float(np.linalg.norm(r.FV().NumPy()[moved])), self.rtol, self.atol):
                     self.load = load
                     return ContactResult(True, it, res)
             if it == self.max_iterations:

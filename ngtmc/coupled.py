@@ -39,7 +39,7 @@ from .dissipation import Dissipation
 from .discretisation import bilinear_form, rules
 from .energy_forms import _QuadraticPlus, merged_terms
 from .solver import NewtonResult
-from .displacement_newton import FLOOR_RTOL, equilibrium_scale, meets  # noqa: F401  (FLOOR_RTOL re-exported)
+from .displacement_newton import FLOOR_RTOL, meets  # noqa: F401  (FLOOR_RTOL re-exported)
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
@@ -287,8 +287,8 @@ class CoupledNewton:
 
     def _converged(self, res_u, res_a, g, reac, rtol, tol_a, scale_g, g_rtol: float = 1e-6) -> bool:
         """Convergence test: displacement residual (N) below ``rtol`` times the iterate's reaction
-        on the dofs the loads move ``reac`` (:func:`ngtmc.displacement_newton.equilibrium_scale`;
-        no residual of the step) plus
+        on the dofs the loads move ``reac`` (:func:`ngtmc.displacement_newton.meets`; no residual
+        of the step) plus
         the solver's atol, complementarity residual below ``tol_a``, and (path following, with
         ``scale_g`` the dissipation step) the constraint to ``g_rtol`` of the step (1e-6; at the
         residual floor FLOOR_RTOL: the quick L-panel's crack run, path following, stalled with
@@ -296,7 +296,7 @@ class CoupledNewton:
         base after cut-backs), the active set of alpha = alpha_n changing by a few dofs per
         iteration, both residuals met; it failed at the minimum increment there)."""
         s = self.s
-        return (meets(res_u, equilibrium_scale(reac), rtol, s.newton.atol) and res_a <= tol_a
+        return (meets(res_u, reac, rtol, s.newton.atol) and res_a <= tol_a
                 and (scale_g is None or abs(g) <= g_rtol * scale_g))
 
 

@@ -20,7 +20,6 @@ import time
 
 import numpy as np
 
-from .displacement_newton import equilibrium_scale
 from .solver import NewtonResult
 
 __all__ = ["Iteration"]
@@ -150,7 +149,7 @@ class Iteration:
                                                      fr / n.alpha_tol * self.tol_a, self.scale_g, g_rtol=fr):
             return None
         n.floor_accepts += 1
-        n.floor_worst = max(n.floor_worst, self.res_u / max(equilibrium_scale(self.scale), 1e-300))
+        n.floor_worst = max(n.floor_worst, self.res_u / max(self.scale, 1e-300))
         return self.accept(it, held)
 
     def stuck(self, it, held, message, done_iterations=None):

@@ -19,7 +19,7 @@ import numpy as np
 import ngsolve as ngs
 
 __all__ = ["DisplacementNewton", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
-           "equilibrium_scale", "meets", "lifted_direction"]
+           "meets", "lifted_direction"]
 
 #: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
 DISPLACEMENT_RTOL = 1e-8
@@ -27,8 +27,8 @@ DISPLACEMENT_RTOL = 1e-8
 #: Relative residual at which an iterate is accepted when the Newton direction no longer reduces
 #: the residual (line search failed or the iteration stalled), instead of the solver's rtol
 #: (1e-8): the default of ``NewtonOptions.floor_rtol`` (None refuses such iterates: the attempt
-#: fails and the step is cut back). Relative to :func:`equilibrium_scale`, the reaction of the
-#: iterate itself, never a residual of the step, so that a large step cannot loosen it.
+#: fails and the step is cut back). Relative to :meth:`DisplacementNewton.equilibrium_scale`, the
+#: reaction of the iterate itself, never a residual of the step, so that a large step cannot loosen it.
 #: Why a floor at all: deep in the crack run of the paper three-point bending the correction is
 #: dominated by a near-singular mode, the horizontal motion of a vertex of the void layer squeezed
 #: under the indenter (the Hessian regulariser acts on the quadratic part of the order-2 field
@@ -61,7 +61,7 @@ class NewtonOptions:
 
     The tolerance an accepted state meets: residual norm on the free dofs (N) <= rtol x
     (the iterate's reaction norm, or the applied tractions' where larger:
-    :func:`equilibrium_scale`) + atol, with floor_rtol in place of rtol in the steps whose
+    :meth:`DisplacementNewton.equilibrium_scale`) + atol, with floor_rtol in place of rtol in the steps whose
     ``floor_accepts`` is not 0. The history column ``residual`` records it for every step.
     """
 
@@ -116,18 +116,14 @@ def residual_split(r, u, target: np.ndarray, free: np.ndarray, dirichlet: np.nda
     return rem, ranks.any(lifted), ranks.masked_norm(r, free), ranks.masked_norm(r, dirichlet)
 
 
-def equilibrium_scale(reac: float, external: float = 0.0) -> float:
-    """The force scale (N) that an iterate's residual is measured against: the norm of its reaction
-    ``reac`` (the residual on the dofs the displacement loads move), or of the applied tractions
-    ``external`` where that is larger. Both belong to the iterate, so the scale cannot inflate with a large step (the
-    residual of a step's first iterate, used before, did: a rigid rotation by 90 degrees in one
-    step was accepted with a force of 1.2e-7 N and a body 4e-7 mm off the rotation). The one owner
-    of this scale: the displacement Newton and the coupled Newton both use it."""
-    return max(float(reac), float(external))
-
-
 def meets(res: float, scale: float, rtol: float, atol: float) -> bool:
-    """True where the residual norm ``res`` (N) meets ``rtol`` x ``scale`` + ``atol``."""
+    """True where the residual norm ``res`` (N) meets ``rtol`` x ``scale`` + ``atol``. The scale is
+    the iterate's own: the norm of its reaction on the dofs the displacement loads move, or of the
+    applied tractions where that is larger (:meth:`DisplacementNewton.equilibrium_scale`; the
+    coupled Newton and the classical-contact solver take the same norm of their residual), never
+    a residual of the step, which grows with the step (a rigid rotation by 90 degrees in one step
+    was accepted with a force of 1.2e-7 N and a body 4e-7 mm off the rotation). The one owner of
+    the test: the three Newton solvers use it."""
     return res <= rtol * scale + atol
 
 
@@ -170,15 +166,15 @@ class DisplacementNewton:
         return "masterinverse" if self.ranks.parallel else kind
 
     def equilibrium_scale(self, r, load: float) -> float:
-        """:func:`equilibrium_scale` of this solver's iterate, whose residual is ``r`` (an NGSolve
-        vector, N), at the load ``load`` (mm): the norm of the reactions on the dofs that the
-        displacement loads move, and of the tractions applied at ``load`` (force control). The
-        supports' reactions are left out: a plane-strain slab's held u_z carry reactions that its
-        2D twin has no dofs for, and the two would converge differently."""
-        external = 0.0
+        """The force scale (N) of :func:`meets` for this solver's iterate, whose residual is ``r``
+        (an NGSolve vector), at the load ``load`` (mm): the norm of the reactions on the dofs that
+        the displacement loads move, or of the tractions applied at ``load`` (force control) where
+        that is larger. The supports' reactions are left out: a plane-strain slab's held u_z carry
+        reactions that its 2D twin has no dofs for, and the two would converge differently."""
+        scale = self.ranks.masked_norm(r, self._moved_np)
         if self._tractions:
-            external = abs(load) * self.ranks.masked_norm(self._f_ext, self._free_np)
-        return equilibrium_scale(self.ranks.masked_norm(r, self._moved_np), external)
+            scale = max(scale, abs(load) * self.ranks.masked_norm(self._f_ext, self._free_np))
+        return scale
 
     @property
     def _ranks_or_none(self):
@@ -225,8 +221,8 @@ class DisplacementNewton:
         """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed.
 
         Converged where the residual on the free dofs meets rtol (``displacement_rtol``) times
-        the iterate's own force scale (:func:`equilibrium_scale`: its reaction, or the applied
-        tractions) plus atol; no residual of the step (a first iterate's, a predictor's) enters
+        the iterate's own force scale (:meth:`equilibrium_scale`: its reaction, or the applied
+        tractions) plus atol (:func:`meets`); no residual of the step (a first iterate's, a predictor's) enters
         the tolerance, so that a large step cannot loosen it.
 
         The Dirichlet increment is carried by the Newton increment (never written into u
@@ -239,8 +235,8 @@ class DisplacementNewton:
         stops falling (by less than half in an iteration, also the last one) or the line search
         fails, the iterate is accepted if its residual is below ``floor_rtol``
         (``NewtonOptions.floor_rtol``; None: never) of the same scale (counted in
-        ``floor_accepts``, the worst relative residual in ``floor_worst``). On failure u is left
-        at the last iterate; the caller restores the state."""
+        ``floor_accepts``). On failure u is left at the last iterate; the caller restores the
+        state."""
         opt = self.newton
         rtol = self.displacement_rtol
         u = self.u.vec
@@ -260,11 +256,9 @@ class DisplacementNewton:
 
         def at_floor(it):
             """The residual no longer falls: the iterate accepted if it is below the floor, else None."""
-            scale = self.equilibrium_scale(r, load)
-            if not floor or lifted or not meets(res, scale, floor, opt.atol):
+            if not floor or lifted or not meets(res, self.equilibrium_scale(r, load), floor, opt.atol):
                 return None
             self.floor_accepts += 1
-            self.floor_worst = max(self.floor_worst, res / max(scale, 1e-300))
             self.load = load
             self._r_valid = False
             return NewtonResult(True, it, res, solve_time, assembly_time, shifted)

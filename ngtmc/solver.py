@@ -221,8 +221,6 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         #: displacement solves so accepted
         self.floor_rtol = self.newton.floor_rtol
         self.floor_accepts = 0
-        #: the largest relative residual (residual / equilibrium scale) of a floor acceptance
-        self.floor_worst = 0.0
         #: line searches of the displacement Newton whose energy could not resolve the step
         #: (round-off, ngtmc.displacement_newton.NOISE_FRACTION), so that its residual decided
         self.energy_noise_switches = 0
