@@ -108,12 +108,17 @@ class Progress(Plugin):
         if self.enabled is True:
             emit(f"{self.prefix} {text}")
 
+    def _windowed(self, entries: deque, elapsed: float, value: float) -> tuple[float, float]:
+        """Append ``(elapsed, value)`` to ``entries``, drop what lies before the last ``window``
+        seconds, and return the oldest entry kept."""
+        entries.append((elapsed, value))
+        while len(entries) > 2 and elapsed - entries[1][0] >= self.window:
+            entries.popleft()
+        return entries[0]
+
     def time_left(self, elapsed: float, t: float, total: float) -> tuple[float, float] | None:
         """``(seconds left, seconds of the pace window)`` from the recent pace, or None."""
-        self.pace.append((elapsed, t))
-        while len(self.pace) > 2 and elapsed - self.pace[1][0] >= self.window:
-            self.pace.popleft()
-        e0, t0 = self.pace[0]
+        e0, t0 = self._windowed(self.pace, elapsed, t)
         if elapsed - e0 <= 0 or t - t0 <= 0 or total <= 0 or t >= total:
             return None
         return (total - t) * (elapsed - e0) / (t - t0), elapsed - e0
@@ -124,21 +129,23 @@ class Progress(Plugin):
         d, a = row.get("dissipated_energy"), row.get("max_alpha")
         if d is None or not math.isfinite(float(d)):
             return False
-        self.dissipation.append((elapsed, float(d)))
-        while len(self.dissipation) > 2 and elapsed - self.dissipation[1][0] >= self.window:
-            self.dissipation.popleft()
-        d0 = self.dissipation[0][1]
+        _, d0 = self._windowed(self.dissipation, elapsed, float(d))
         cracked = a is not None and float(a) >= self.CRACK_ALPHA
         return cracked and float(d) > 0 and float(d) - d0 > self.CRACK_RUNNING * float(d)
 
-    def line(self, sim, row: dict) -> str:
+    def observe(self, sim, row: dict) -> tuple:
+        """Take in an accepted step (every step, printed or not): the pace, the dissipation and the
+        furthest share of the load path. Returns (elapsed s, share of the path, whether the load
+        turned back, the time left or None, whether the crack runs)."""
         total = sim.schedule.total_time
         frac = sim.t / total if total > 0 else 1.0
         back = frac < self.furthest - 1e-12
         self.furthest = max(self.furthest, frac)
         el = float(row.get("wall_time", 0.0) or 0.0)
-        left = self.time_left(el, sim.t, total)
-        running = self.crack_running(el, row)
+        return el, frac, back, self.time_left(el, sim.t, total), self.crack_running(el, row)
+
+    def line(self, sim, row: dict) -> str:
+        el, frac, back, left, running = self.observe(sim, row)
         eta = ""
         cracks = getattr(sim.solver, "alpha", None) is not None
         alpha_max = row.get("max_alpha")
@@ -170,12 +177,7 @@ class Progress(Plugin):
             return
         now = time.perf_counter()
         if now - self.last < self.interval and not sim.finished:
-            # the pace, the dissipation and the furthest share still need every step
-            el = float(row.get("wall_time", 0.0) or 0.0)
-            self.time_left(el, sim.t, sim.schedule.total_time)
-            self.crack_running(el, row)
-            total = sim.schedule.total_time
-            self.furthest = max(self.furthest, sim.t / total if total > 0 else 1.0)
+            self.observe(sim, row)      # the pace, the dissipation and the furthest share need every step
             return
         self.last = now
         emit(self.line(sim, row))

@@ -30,9 +30,8 @@ class RunRecords:
         t0 = time.perf_counter()
         en = s.energies(wf)
         forces = s.reactions(reuse_residual=self.step > 0)
-        floors = self._floor_total()
-        seen = getattr(self, "_floors_recorded", None)
-        self._floors_recorded = floors
+        floors = self.solver.floor_accepts + (self.coupled.floor_accepts if self.coupled is not None else 0)
+        seen, self._floors_recorded = getattr(self, "_floors_recorded", None), floors   # None before the first row
         row = {
             "step": self.step,
             "load": s.load,
@@ -63,11 +62,6 @@ class RunRecords:
         self.rows.append(row)
         s.timings["record"] += time.perf_counter() - t0
         return row
-
-    def _floor_total(self) -> int:
-        """Solves accepted at the residual floor so far (displacement and coupled Newton)."""
-        c = getattr(self, "coupled", None)
-        return int(getattr(self.solver, "floor_accepts", 0)) + (int(c.floor_accepts) if c is not None else 0)
 
     @property
     def history(self) -> pd.DataFrame:
