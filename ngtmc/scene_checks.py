@@ -22,7 +22,7 @@ import ngsolve as ngs
 
 from .conditions import LOAD_KINDS, DisplacementField, DisplacementLoad, Point, Support, Traction, _LETTERS, _where
 from .materials import Material, check_number
-from .regions import region_names
+from .regions import region_names, vertices_of
 from .scene import ResolutionWarning, Scene
 from .splits import check_split
 
@@ -248,8 +248,7 @@ def _check_shared_vertices(mesh, held: dict, moving: set):
             vs = {key[1]}
         else:
             if key[1] not in on:
-                on[key[1]] = {v.nr for el in mesh.Elements(ngs.BND) if re.fullmatch(key[1], el.mat)
-                              for v in el.vertices}
+                on[key[1]] = vertices_of(mesh, key[1], ngs.BND)
                 if not on[key[1]] and mesh.comm.size == 1:
                     raise ValueError(f"{desc}: boundary {key[1]!r} is named in the mesh but no boundary element "
                                      "carries it, so the condition would hold nothing")

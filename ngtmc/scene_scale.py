@@ -28,6 +28,8 @@ import warnings
 
 import numpy as np
 
+from .regions import box_diagonal, matches, regex, vertices_of
+
 __all__ = ["ScaleWarning", "check_scale", "check_load_scale", "E_RANGE", "GC_RANGE", "STRAIN_RANGE", "SIZE_RANGE", "L0_FRACTION",
            "POINT_FRACTION"]
 
@@ -58,8 +60,7 @@ def check_load_scale(scene, loads) -> list[str]:
     from .conditions import Traction
     if all(isinstance(ld, Traction) for ld in scene.loads):
         return []
-    pts = np.asarray(scene.mesh.ngmesh.Coordinates())[:, :scene.mesh.dim]
-    diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+    diag = box_diagonal(np.asarray(scene.mesh.ngmesh.Coordinates())[:, :scene.mesh.dim])
     top = max(abs(float(x)) for x in loads)
     if top > diag:
         msg = (f"the schedule's largest load, {top:g} mm, is more than the body's size ({diag:.3g} mm): is the "
@@ -85,7 +86,7 @@ def check_scale(scene) -> list[str]:
     pts = np.asarray(mesh.ngmesh.Coordinates())[:, :d]
     if pts.size == 0:
         return out
-    diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+    diag = box_diagonal(pts)
     if not (SIZE_RANGE[0] <= diag <= SIZE_RANGE[1]):
         say(f"Scene.mesh: the body's size (bounding-box diagonal) is {diag:.3g} mm, outside the plausible "
             f"{SIZE_RANGE[0]:g} to {SIZE_RANGE[1]:g} mm: is it drawn in metres (or micrometres)?")
@@ -100,7 +101,7 @@ def check_scale(scene) -> list[str]:
         if not (E_RANGE[0] <= mat.E <= E_RANGE[1]):
             hint = " (E in Pa?)" if mat.E > E_RANGE[1] else " (E in GPa or kN/mm^2?)"
             say(f"{where}.E = {mat.E:g} MPa is outside the plausible {E_RANGE[0]:g} to {E_RANGE[1]:g} MPa{hint}")
-        cracks = [r for r in regions if re.fullmatch(pattern, r) and any(re.fullmatch(f, r) for f in frac)]
+        cracks = [r for r in regions if matches(pattern, r) and any(matches(f, r) for f in frac)]
         if not cracks:
             continue
         if not (GC_RANGE[0] <= mat.Gc <= GC_RANGE[1]):
@@ -112,11 +113,9 @@ def check_scale(scene) -> list[str]:
             say(f"{where}: the strength of AT-2, (3/16) sqrt(3 E Gc / l0) = {sigma_c:.3g} MPa, is a strain of "
                 f"{strain:.3g} at E = {mat.E:g} MPa, outside the plausible {STRAIN_RANGE[0]:g} to "
                 f"{STRAIN_RANGE[1]:g}: are E, Gc and l0 in MPa, N/mm and mm?")
-        cells = [el for el in mesh.Elements() if el.mat in cracks]
-        if cells:
-            verts = sorted({v.nr for el in cells for v in el.vertices})
-            q = pts[verts]
-            size = float(np.linalg.norm(q.max(axis=0) - q.min(axis=0)))
+        verts = sorted(vertices_of(mesh, regex(re.escape(r) for r in cracks)))
+        if verts:
+            size = box_diagonal(pts[verts])
             if mat.l0 > L0_FRACTION * size:
                 say(f"{where}.l0 = {mat.l0:g} mm is more than {L0_FRACTION:g} of the fracture region's size "
                     f"({size:.3g} mm): the phase field cannot localise into a crack there")

@@ -33,7 +33,7 @@ from .displacement_newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOp
 from .distributed import Ranks
 from .discretisation import lower_order_outside
 from .conditions import Point, Support, Traction
-from .regions import matches, regex, region_names
+from .regions import matches, regex, region_names, vertices_of
 from .scene import Scene
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
@@ -314,8 +314,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         mesh = self.mesh
         pts = np.asarray(mesh.ngmesh.Coordinates())[:mesh.nv]
         if self.alpha is not None:
-            pts = pts[sorted({v.nr for el in mesh.Elements(ngs.VOL) if matches(self._frac_re, el.mat)
-                              for v in el.vertices})]
+            pts = pts[sorted(vertices_of(mesh, self._frac_re))]
         return self._box(pts)
 
     def _box(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
