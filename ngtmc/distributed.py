@@ -34,7 +34,7 @@ import math
 import numpy as np
 import ngsolve as ngs
 
-__all__ = ["Ranks", "distribute", "is_distributed", "check_supported"]
+__all__ = ["Ranks", "distribute", "is_distributed", "check_supported", "refuse_unsupported", "unsupported"]
 
 
 def is_distributed(mesh) -> bool:
@@ -163,16 +163,22 @@ def check_supported(scene, adapt=None, out_dir=None):
     """Raise NotImplementedError for what a distributed scene cannot do yet (module docstring);
     nothing for a serial scene."""
     if is_distributed(scene.mesh):
-        _refuse(_unsupported(scene, adapt, out_dir))
+        refuse_unsupported(scene, adapt, out_dir)
 
 
-def _refuse(what: list):
+def refuse_unsupported(scene, adapt=None, out_dir=None):
+    """Raise NotImplementedError naming what of ``scene`` (and ``adapt``, ``out_dir``) a mesh
+    distributed over MPI ranks cannot do yet (:func:`unsupported`), whether or not ``scene`` is
+    distributed already (the runner asks before it distributes)."""
+    what = unsupported(scene, adapt, out_dir)
     if what:
         raise NotImplementedError("on a mesh distributed over MPI ranks, ngtmc does not support yet: " + "; ".join(what)
                                   + " (docs/parallel.md)")
 
 
-def _unsupported(scene, adapt=None, out_dir=None) -> list:
+def unsupported(scene, adapt=None, out_dir=None) -> list:
+    """What of ``scene`` (and ``adapt``, ``out_dir``) a distributed mesh cannot do yet, one phrase
+    each (empty: all of it can)."""
     from collections.abc import Mapping
     from .conditions import DisplacementField, Point, Traction
     what = []
@@ -201,7 +207,7 @@ def distribute(scene, comm=None, curve: int | None = None):
         comm = MPI.COMM_WORLD
     if comm.size == 1:
         return scene
-    _refuse(_unsupported(scene))
+    refuse_unsupported(scene)
     import netgen.meshing as nm
     if comm.rank == 0:
         ngmesh = scene.mesh.ngmesh.Copy()

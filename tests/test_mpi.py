@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import ngtmc
-from ngtmc.distributed import Ranks, _unsupported
+from ngtmc.distributed import Ranks, unsupported
 from ngtmc.study import StudyError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -116,7 +116,7 @@ def test_serial_reductions_are_the_plain_values_and_unsupported_inputs_are_named
     assert not r.parallel and r.sum(2.5) == 2.5 and r.min(np.array([3.0, 1.0])) == 1.0
     assert r.max(np.zeros(0)) == -np.inf and r.any(True) and not r.all(False)
     assert ngtmc.distributed.distribute(sc, comm=_SingleRank()) is sc
-    msgs = _unsupported(sc, adapt=object(), out_dir="x")
+    msgs = unsupported(sc, adapt=object(), out_dir="x")
     assert len(msgs) == 2 and "adaptive refinement" in msgs[0]
 
 

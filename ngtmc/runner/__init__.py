@@ -179,7 +179,7 @@ def run_study(name: str | ModuleType, resolution: str | None = None, output: str
     solved, for bad input (unknown study, resolution or override, ill-typed or out-of-range
     values, a bad scene, threads < 1) or a resume that would mix parameters.
     """
-    return _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
+    return execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
                     checkpoint_seconds, vtk, callbacks, workers=workers, scheduler=scheduler, mpi=mpi).out
 
 
@@ -202,7 +202,7 @@ def _mpi_world(parallel: bool):
     return comm
 
 
-def _execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
+def execute(name, resolution, output, overrides, report, resume, progress, threads, checkpoint_every,
              checkpoint_seconds, vtk, callbacks, *, workers=None, scheduler=None, mpi=False) -> "_Run":
     """The work of :func:`run_study`; returns the finished run (its folder ``out``, and the
     Simulation of each case computed in this process in ``simulations``)."""
@@ -263,7 +263,7 @@ def _say(message: str):
 
 def _claimed(mod, res, p, out, typed, comm, root, meta, resume, report, progress, threads, auto, parallel,
              workers, scheduler, checkpoint_every, checkpoint_seconds, callbacks, vtk) -> "_Run":
-    """The rest of :func:`_execute`, in a folder this run has claimed."""
+    """The rest of :func:`execute`, in a folder this run has claimed."""
     with _rank_folder(out, comm) as rank_out:
         run = _Run(mod, res, p, rank_out, typed, progress, checkpoint_every, checkpoint_seconds, callbacks, vtk,
                    comm=comm)

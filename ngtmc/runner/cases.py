@@ -147,8 +147,8 @@ class _Run(RunFolder):
                     warnings.simplefilter("ignore", ResolutionWarning)
                     scene.check(getattr(adapt, "h_crack", None))
                 if self.comm is not None:  # what the distributed scene will refuse, refused before anything runs
-                    from ..distributed import _refuse, _unsupported
-                    _refuse(_unsupported(scene, (case.options or {}).get("adapt")))
+                    from ..distributed import refuse_unsupported
+                    refuse_unsupported(scene, adapt)
             except (ValueError, TypeError, NotImplementedError) as e:
                 raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
 

@@ -160,13 +160,13 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
     :func:`scene_study` and :func:`run_study`. Returns the :class:`ngtmc.SimulationResult`, its
     ``run_dir`` set. ``ngtmc.simulate(..., out_dir=...)`` calls this."""
     from ..simulation import HISTORY_UNITS, SimulationResult
-    from . import _execute        # the run of a named study (ngtmc.runner)
+    from . import execute        # the run of a named study (ngtmc.runner)
     if out_dir is None:
         raise StudyError("run_scene needs out_dir, the run folder to write")
     mod = scene_study(scene, schedule, control, name=name, title=title, summary=summary,
                       snapshot_loads=snapshot_loads, references=references, targets=targets, section=section,
                       **options)
-    run = _execute(mod, None, out_dir, None, report, resume, progress, threads, checkpoint_every,
+    run = execute(mod, None, out_dir, None, report, resume, progress, threads, checkpoint_every,
                    checkpoint_seconds, vtk, callbacks)
     sim = run.simulations.get("main")
     rows = run.rows.get("main") or []
