@@ -1,5 +1,5 @@
 """The linear solves of one coupled (u, alpha) Newton iteration of a named study's scene, side by
-side for the coupled linear solvers (``ngtmc.coupled_linear.LINEAR_SOLVERS``, and a preconditioner
+side for the coupled linear solvers (``ngtmc.coupled.linear.LINEAR_SOLVERS``, and a preconditioner
 tried and not kept, ``symmetric-part``): factorization of
 the assembled tangent, and the two solves of the bordered system of path following (the Newton
 correction and the response to a unit load change). Best of 3, ms; GMRES iterations per solve.
@@ -24,8 +24,9 @@ import numpy as np
 import ngsolve as ngs
 
 import ngtmc
-from ngtmc.coupled_linear import LINEAR_SOLVERS
-from ngtmc.study import load_study, simulation_options, study_parameters
+from ngtmc.coupled.linear import LINEAR_SOLVERS
+from ngtmc.study import load_study
+from ngtmc.study import simulation_options, study_parameters
 
 
 def best(f, n=3):
@@ -88,7 +89,7 @@ def measure_symmetric_part(sim) -> dict:
     """The same for a preconditioner tried and not kept: one sparse Cholesky factorization of the
     symmetric part (A + A^T) / 2 of the whole coupled tangent, in GMRES on the tangent."""
     from ngsolve.krylovspace import GMResSolver
-    from ngtmc.coupled_linear import _Masked, _SquareOperator
+    from ngtmc.coupled.linear import Masked, SquareOperator
     c, s = sim.coupled, sim.solver
     c._gather()
     c.form.AssembleLinearization(c.x.vec)
@@ -109,12 +110,12 @@ def measure_symmetric_part(sim) -> dict:
     inv = M.Inverse(ngs.BitArray(free.tolist()), inverse="sparsecholesky")
     out = {"factorization": best(inv.Update)[0]}
 
-    class Pre(_SquareOperator):
+    class Pre(SquareOperator):
         def Mult(self, x, y):
             y.data = inv * x
             y.FV().NumPy()[~free] = x.FV().NumPy()[~free]
 
-    op, pre = _Masked(A, free), Pre(A)
+    op, pre = Masked(A, free), Pre(A)
     rhs = c.x.vec.CreateVector()
     rhs.FV().NumPy()[:] = np.random.default_rng(1).standard_normal(rhs.size)
     rhs.FV().NumPy()[~free] = 0.0

@@ -8,7 +8,7 @@ when it is 1 mm), times in s (``*_s``) or ms (``*_ms``), errors in % (``*_pct``)
 * :func:`format_table` renders records as a fixed-width or markdown table.
 
 Everything except :func:`run_variant` is pure (numpy/pandas, and the one definition of the peak
-of a force-load curve, :func:`ngtmc.runfiles.peak`) and solves nothing.
+of a force-load curve, :func:`ngtmc.study.run_files.peak`) and solves nothing.
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from ngtmc.runfiles import peak, peak_index
+from ngtmc.simulation.history import peak, peak_index
 
 __all__ = ["parse_value", "parse_assignments", "merge_options", "pseudo_time", "downsample", "summarise",
            "compare", "timing_split", "table_rows", "format_table", "jsonable", "run_variant", "TABLE_COLUMNS"]
@@ -205,7 +205,7 @@ def format_table(records, markdown: bool = False) -> str:
 def jsonable(x):
     """``x`` in plain JSON types by the run folders' conversion (numpy values, NaN -> None), with
     dataclasses (e.g. NewtonOptions) as dicts naming their type and other objects as their repr."""
-    from ngtmc.runner import _jsonable
+    from ngtmc.study.run_files import jsonable as _jsonable
     return _jsonable(x, other=_json_other)
 
 

@@ -15,7 +15,8 @@ import time
 import ngsolve as ngs
 
 import ngtmc
-from ngtmc.study import load_study, study_parameters
+from ngtmc.study import load_study
+from ngtmc.study import study_parameters
 
 CONFIGURATIONS = [
     ("order 2 everywhere, symbolic compile", {"variable_order": False}, True),

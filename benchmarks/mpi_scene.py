@@ -7,8 +7,8 @@ squeezed under the punch, then the lower block cracks from the punch's corners. 
 
 Under MPI (``mpiexec -n 3 python -m mpi4py benchmarks/mpi_scene.py OUT.json``; ``-m mpi4py`` aborts
 every rank when one raises, instead of leaving the others waiting): every rank builds the scene,
-:func:`ngtmc.distributed.distribute` spreads it, and rank 0 writes OUT.json with the history and
-the rank-local numbers that the NGSolve traps of :mod:`ngtmc.distributed` are about.
+:func:`ngtmc.scene.distributed.distribute` spreads it, and rank 0 writes OUT.json with the history and
+the rank-local numbers that the NGSolve traps of :mod:`ngtmc.scene.distributed` are about.
 """
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ def main(out: str):
     from mpi4py import MPI
     comm = MPI.COMM_WORLD
     warnings.simplefilter("ignore", ngtmc.ResolutionWarning)
-    sc = ngtmc.distributed.distribute(scene(), comm)
+    sc = ngtmc.scene.distributed.distribute(scene(), comm)
     t0 = time.perf_counter()
     sim = run(sc)
     wall = time.perf_counter() - t0

@@ -20,7 +20,8 @@ import sys
 from pathlib import Path
 
 import ngtmc
-from ngtmc.study import SOLVER_PARAMETERS, Case, simulation_options
+from ngtmc.study import Case
+from ngtmc.study import SOLVER_PARAMETERS, simulation_options
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import mpi_scene  # noqa: E402

@@ -23,7 +23,8 @@ from pathlib import Path
 import ngsolve as ngs
 
 import ngtmc
-from ngtmc.study import load_study, simulation_options, study_parameters
+from ngtmc.study import load_study
+from ngtmc.study import simulation_options, study_parameters
 
 
 def refine_near(mesh, centre: tuple[float, float], radius: float, levels: int) -> None:

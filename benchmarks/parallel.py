@@ -102,7 +102,8 @@ def main(argv=None) -> int:
     from ngtmc.cli import parse_overrides
     from ngtmc.runner import run_study
     from ngtmc.runner.parallel import check_settings
-    from ngtmc.study import StudyError, load_study, load_study_file
+    from ngtmc.study import load_study, load_study_file
+    from ngtmc.study import StudyError
     try:
         overrides = parse_overrides(args.overrides)
         mod = load_study_file(args.study) if args.study.endswith(".py") else load_study(args.study)

@@ -6,7 +6,7 @@ the peak the loading is monotone at every history point, so converged steps of a
 the same states; the fine steps sample the flat top of the curve (``--crack-advance``: finer
 dissipation steps too, where path following switches to them). ``--scheme monolithic`` uses
 fixed-load steps only (at the paper's resolution they stall at 0.0903 mm: the squeezed-void
-mode of ``ngtmc.coupled.FLOOR_RTOL``, which path following accepts at its residual floor).
+mode of ``ngtmc.coupled.monolithic.FLOOR_RTOL``, which path following accepts at its residual floor).
 Prints and writes a JSON record with the peak (N/mm), its load (mm), steps, Newton iterations
 and wall time.
 
@@ -25,8 +25,9 @@ from pathlib import Path
 import ngsolve as ngs
 
 import ngtmc
-from ngtmc.simulation import StepFailure
-from ngtmc.study import load_study, study_parameters
+from ngtmc.simulation.loop import StepFailure
+from ngtmc.study import load_study
+from ngtmc.study import study_parameters
 
 
 def reference_peak(resolution: str, fine_from: float, du_fine: float, du_coarse: float = 2e-3, stop: float = 0.0946,

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ngtmc import plugins
+from ngtmc.simulation import plugins
 from ngtmc.runner import run_study
 
 RESULTS = Path(__file__).resolve().parent / "results"

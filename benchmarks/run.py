@@ -161,7 +161,9 @@ def main(argv=None, study: str | None = None, prog: str = "benchmarks.run") -> i
     import ngsolve as ngs
     import ngtmc
     from ngtmc.cli import parse_overrides
-    from ngtmc.study import StudyError, load_study, study_parameters
+    from ngtmc.study import load_study
+    from ngtmc.study import StudyError
+    from ngtmc.study import study_parameters
 
     def usage(msg):
         print(f"{prog}: error: {msg}", file=sys.stderr)

@@ -36,9 +36,10 @@ def measure(resolution: str, matrix: str, solver: str, threads: int, symmetry: s
     import ngsolve as ngs
 
     import ngtmc
-    from ngtmc.coupled import CoupledNewton
+    from ngtmc.coupled.monolithic import CoupledNewton
     from ngtmc.runner.cases import peak_memory_mb
-    from ngtmc.study import load_study, study_parameters
+    from ngtmc.study import load_study
+    from ngtmc.study import study_parameters
 
     ngs.SetNumThreads(threads)
     mod = load_study("three_point_bending_3d")

@@ -6,7 +6,7 @@
    resolutions (h = 0.1 and 0.05 mm) side by side:
 
    * ``exact``: the defaults (order 2 everywhere, the regulariser's rule exact on the
-     quadrilaterals: :func:`ngtmc.discretisation.term_rules`), steps of 0.0096 mm;
+     quadrilaterals: :func:`ngtmc.discrete.spaces.term_rules`), steps of 0.0096 mm;
    * ``fine``: the same with steps of 0.0024 mm and the regulariser integrated with a rule of
      order 8, the reference;
    * ``one-point``: the regulariser's one-point rule on every element type (exact on straight
@@ -38,8 +38,8 @@ import ngsolve as ngs
 from netgen.occ import Glue, MoveTo, OCCGeometry, Rectangle, X, Y
 
 import ngtmc
-import ngtmc.displacement_energy as _energy
-from ngtmc.discretisation import rules, term_rules
+import ngtmc.discrete.displacement_energy as _energy
+from ngtmc.discrete.spaces import rules, term_rules
 
 RESULTS = Path(__file__).resolve().parent / "results"
 FINAL = 0.24            # mm: the slot (0.2 mm) closed and the arms pressed 0.04 mm further
@@ -68,7 +68,7 @@ def c_shape(maxh: float = 0.1, quad: bool = True, variable_order: bool = False) 
 
 
 class _rule_override:
-    """The regulariser's rule of :func:`ngtmc.discretisation.term_rules` replaced for the block:
+    """The regulariser's rule of :func:`ngtmc.discrete.spaces.term_rules` replaced for the block:
     ``"one-point"`` (order 2p - 4 on every element type, the rule before 0.2.0) or ``"order8"``
     (order 8 on every element type, the reference: exact on straight elements, converged to
     1e-6 or better elsewhere). The elastic terms keep their rules (the history and J-guard points)."""

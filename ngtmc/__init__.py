@@ -39,20 +39,22 @@ if (not (_Path(__file__).resolve().parent / "studies").is_dir()
         and _SourceTreeStudies not in _sys.meta_path):
     _sys.meta_path.insert(0, _SourceTreeStudies)
 
-from .materials import Material  # noqa: E402
-from .conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
-from .scene import ElementWarning, Regulariser, ResolutionWarning, Scene  # noqa: E402
-from .scene_scale import ScaleWarning  # noqa: E402
-from .gmsh import read_gmsh  # noqa: E402
-from .simulation import HISTORY_UNITS, Simulation, SimulationResult, StepFailure, simulate  # noqa: E402
-from .solver import NewtonOptions, Solver  # noqa: E402
-from .stepping import AdaptiveStepControl, Schedule  # noqa: E402
-from .adapt import Adaptivity  # noqa: E402
-from .extrude import extrude  # noqa: E402
-from . import distributed  # noqa: E402
-from .distributed import distribute  # noqa: E402
+from ngtmc.model.materials import Material  # noqa: E402
+from ngtmc.scene.conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
+from ngtmc.scene.scene import Regulariser, Scene  # noqa: E402
+from ngtmc.scene.warnings import ElementWarning, ResolutionWarning
+from ngtmc.scene.warnings import ScaleWarning  # noqa: E402
+from ngtmc.scene.gmsh import read_gmsh  # noqa: E402
+from ngtmc.simulation.history import HISTORY_UNITS  # noqa: E402
+from ngtmc.simulation.loop import Simulation, SimulationResult, StepFailure  # noqa: E402
+from ngtmc.discrete.solver import NewtonOptions, Solver  # noqa: E402
+from ngtmc.stepping.control import AdaptiveStepControl, Schedule  # noqa: E402
+from ngtmc.adapt import Adaptivity  # noqa: E402
+from ngtmc.scene.extrude import extrude  # noqa: E402
+from ngtmc.scene import distributed  # noqa: E402  (the module, public since 0.1)
+from ngtmc.scene.distributed import distribute  # noqa: E402
 
-__version__ = "0.1.0"
+from ngtmc.version import __version__  # noqa: E402
 
 __all__ = [
     "Material", "Scene", "Support", "DisplacementLoad", "DisplacementField", "Traction", "Point", "Regulariser",
@@ -63,12 +65,13 @@ __all__ = [
     "__version__",
 ]
 
-from .study import Case, list_studies, load_study  # noqa: E402
-from .runner import run_study  # noqa: E402
+from ngtmc.study import list_studies, load_study  # noqa: E402
+from ngtmc.study import Case
+from ngtmc.runner import run_study, simulate  # noqa: E402
 
 __all__ += ["Case", "list_studies", "load_study", "run_study"]
 
-from . import sensitivities  # noqa: E402
-from .sensitivities import differentiate, gradient, record_path  # noqa: E402
+from ngtmc import sensitivities  # noqa: E402
+from ngtmc.sensitivities import differentiate, gradient, record_path  # noqa: E402
 
 __all__ += ["sensitivities", "differentiate", "gradient", "record_path"]

@@ -1,6 +1,6 @@
 """``python -m ngtmc ...`` is the ``ngtmc`` command line (see :mod:`ngtmc.cli`)."""
 import sys
 
-from .cli import main
+from ngtmc.cli import main
 
 sys.exit(main())

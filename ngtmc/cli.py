@@ -39,7 +39,7 @@ def parse_overrides(items) -> dict:
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="ngtmc", description="Third-medium contact and phase-field fracture: "
                                  "run the paper's validation studies and render their reports.")
-    from . import __version__
+    from ngtmc.version import __version__
     ap.add_argument("--version", action="version", version=f"ngtmc {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
 
@@ -78,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_list() -> int:
-    from .study import list_studies, load_study
+    from ngtmc.study import list_studies, load_study
     for name in list_studies():
         try:
             mod = load_study(name)
@@ -103,8 +103,8 @@ def show_study(name: str) -> str:
     """Text describing a study: title, summary, every parameter with its default and unit (mm, N,
     MPa, ...) and description, and the mesh and step sizes of each resolution."""
     import textwrap
-    from .runfiles import _guess_unit
-    from .study import load_study
+    from ngtmc.study.parameters import guess_unit
+    from ngtmc.study import load_study
     mod = load_study(name)
     lines = [f"{mod.NAME.replace('_', '-')}: {getattr(mod, 'TITLE', '')}"]
     summary = " ".join(str(getattr(mod, "SUMMARY", "")).split())
@@ -119,7 +119,7 @@ def show_study(name: str) -> str:
     keys = list(dict.fromkeys(k for r in res.values() for k in r))
     info = getattr(mod, "RESOLUTION_PARAMETERS", {})
     cols = list(res)
-    table = [(k, info.get(k, (_guess_unit(k), ""))[0], [_fmt(res[r].get(k, "-")) for r in cols],
+    table = [(k, info.get(k, (guess_unit(k), ""))[0], [_fmt(res[r].get(k, "-")) for r in cols],
               info.get(k, ("", ""))[1]) for k in keys]
     wk = max([len(t[0]) for t in table] + [3])
     wu = max([len(t[1]) for t in table] + [4])
@@ -134,7 +134,7 @@ def show_study(name: str) -> str:
 
 
 def _cmd_show(args) -> int:
-    from .study import StudyError
+    from ngtmc.study import StudyError
     try:
         print(show_study(args.name))
     except StudyError as e:
@@ -144,8 +144,8 @@ def _cmd_show(args) -> int:
 
 
 def _cmd_run(args) -> int:
-    from .runner import run_study
-    from .study import StudyError
+    from ngtmc.runner import run_study
+    from ngtmc.study import StudyError
     try:
         overrides = parse_overrides(args.overrides)
     except ValueError as e:
@@ -210,7 +210,7 @@ def _cmd_report(args) -> int:
         print("ngtmc report: give a run folder, or --index DIR", file=sys.stderr)
         return 2
     try:
-        from . import report as _report
+        from ngtmc import report as _report
     except ImportError as e:
         print(f"ngtmc report: the report module ngtmc.report is not available ({e})", file=sys.stderr)
         return 1

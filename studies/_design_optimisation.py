@@ -20,8 +20,9 @@ import ngsolve as ngs
 
 import ngtmc
 from ngtmc import sensitivities as sens
-from ngtmc.plugins import force_unit
-from ngtmc.runfiles import run_description, write_atomic, write_json, write_npz
+from ngtmc.simulation.history import force_unit
+from ngtmc.study.run_files import write_atomic, write_json, write_npz
+from ngtmc.study.parameters import run_description
 
 
 def _study():
@@ -226,8 +227,8 @@ def _history_rows(case: str, path) -> pd.DataFrame:
 
 def run_metadata(p: dict, resolution: str, overrides: dict | None, mesh: dict, cases: list[dict], results: dict,
                  wall_time_s: float) -> dict:
-    """metadata.json of an optimisation run in the run-folder schema of ``ngtmc.runfiles``: the
-    common description of a run (:func:`ngtmc.runfiles.run_description`: schema version, versions,
+    """metadata.json of an optimisation run in the run-folder schema of ``ngtmc.study.run_files``: the
+    common description of a run (:func:`ngtmc.study.run_files.run_description`: schema version, versions,
     units, every parameter with its unit, overrides, parameter hashes, process), then this run's
     mesh (elements, vertices, design elements), cases, results and wall time (s)."""
     S = _study()

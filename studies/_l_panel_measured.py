@@ -53,7 +53,7 @@ MEASURED = {
                                                 "(2026-12-02, commit 2333a3a). The monotonic case had failed at "
                                                 "6.284 mm where its crack arrested (a bordered Newton step asking "
                                                 "for a load change of 5e11 mm), since at least 2026-12-01; with "
-                                                "ngtmc.path.LOAD_STEP_LIMIT (now rule 3 of ngtmc.path) it takes displacement steps there. "
+                                                "ngtmc.stepping.path.LOAD_STEP_LIMIT (now rule 3 of ngtmc.stepping.path) it takes displacement steps there. "
                                                 "Both cases with the final rule (commit dedeec6; monotonic alone, "
                                                 "main beside another job). The rule's first version (commit "
                                                 "2333a3a, --workers 2, 400 s): monotonic 368 steps, 1350 "

@@ -24,7 +24,7 @@ Variants of the beam (issue 15, fidelity; the defaults give the paper's mesh unc
 * ``support_zone`` = ``support_length``: no zone beyond the support squares (the squares
   ``support_length`` wide stay, named ``support_zone``).
 
-The file name starts with an underscore: it is a helper, not a study (``ngtmc.study.list_studies``
+The file name starts with an underscore: it is a helper, not a study (``ngtmc.study.registry.list_studies``
 skips it).
 """
 from __future__ import annotations

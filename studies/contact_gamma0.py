@@ -7,7 +7,7 @@ Ciceri et al. (2026), Sect. "Material interpolation", Fig. 3-4: two structural m
 gamma0 times the solid's. gamma0 must be small to avoid parasitic forces and large enough for the
 solver. This study sweeps gamma0 = 1e-4, 1e-5, 1e-6, 1e-7 on one geometry and compares every curve
 with a **classical contact solution of the same bodies** (no void at all; frictionless penalty
-contact with NGSolve's ``ContactBoundary``, :mod:`ngtmc.classical_contact`):
+contact with NGSolve's ``ContactBoundary``, :mod:`ngtmc.classical.penalty_contact`):
 
 1. before contact the void transmits a parasitic force, the difference between the TMC force and
    the classical (contact-free) force. The void acts as a spring of stiffness c gamma0 k (k the
@@ -199,11 +199,11 @@ def penalty(p: dict) -> float:
 
 
 def build_classical(p: dict, penalty_value: float | None = None):
-    """The classical reference: :class:`ngtmc.classical_contact.PenaltyContact` on the beams only.
+    """The classical reference: :class:`ngtmc.classical.penalty_contact.PenaltyContact` on the beams only.
 
     It uses the very mesh of the third-medium scene with the void left out (``regions``), so that
     reference and TMC solutions share the beams' discretisation and differ only by the void."""
-    from ngtmc.classical_contact import PenaltyContact
+    from ngtmc.classical.penalty_contact import PenaltyContact
 
     return PenaltyContact(
         build_mesh(p, void=True), {"lower|upper": material(p)},

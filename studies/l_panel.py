@@ -105,7 +105,7 @@ Measured (forces for the whole 100 mm panel; details in ``MEASURED``)
   crack arrests (6.284 mm, 10.3 kN): the bordered Newton step of a dissipation step asked for a
   load change of 5e11 mm, since the damage no longer responds to the load, and inverted
   elements at every line-search length; the last attempt of such a step is now a displacement
-  step (rule 3 of ``ngtmc.path``). Both cases take about twice the steps of 2026-11-25:
+  step (rule 3 of ``ngtmc.stepping.path``). Both cases take about twice the steps of 2026-11-25:
   the cause is the ceiling on the growth of the dissipation step after a cut-back (commit
   32c1e15: 155 -> 283 steps, 677 -> 1048 iterations, the same peak), which holds the crack run's
   steps small; switched off on today's code, the run stalls at 6.2986 mm instead
@@ -394,8 +394,10 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.runfiles import peak_index
-from ngtmc.study import SOLVER_PARAMETERS, Case, data_path, simulation_options
+from ngtmc.simulation.history import peak_index
+from ngtmc.study import data_path
+from ngtmc.study import Case
+from ngtmc.study import SOLVER_PARAMETERS, simulation_options
 from ngtmc.studies._l_panel_geometry import (_segment, build_mesh, effective_gap,  # noqa: F401 (interface)
                                             effective_schedule)
 from ngtmc.studies._l_panel_measured import (L0_SWEEP, L0_SWEEP_COMMAND, MEASURED,  # noqa: F401 (records)
@@ -414,7 +416,7 @@ SUMMARY = (
 
 #: Parameters added after runs of this study were recorded, at the default those runs had in
 #: effect (``band_left``: the band from x = 150 mm): left out of the parameter hash at that default,
-#: so that those runs still resume (:func:`ngtmc.study.added_at_default`).
+#: so that those runs still resume (:func:`ngtmc.study.registry.added_at_default`).
 ADDED_AT_DEFAULT = ("band_left",)
 
 PARAMETERS = {
@@ -442,7 +444,7 @@ PARAMETERS = {
     "load_introduction": ("indenter", "-", "'indenter' (paper: an indenter pushes the arm across a 6 mm void) or "
                           "'segment' (diagnostic: no indenter and no void; the schedule minus the gap is imposed on "
                           "the arm's lower face from load_x to its end)"),
-    "split": ("vol-dev-J", "-", "tension/compression split (ngtmc.splits.SPLITS): 'vol-dev-J' (paper), "
+    "split": ("vol-dev-J", "-", "tension/compression split (ngtmc.model.splits.SPLITS): 'vol-dev-J' (paper), "
               "'vol-dev-small', 'vol-dev-log', 'spectral' (Miehe 2010; Ambati's history) or 'none'"),
     "formulation": ("hybrid", "-", "where the split acts: 'hybrid' (history only; paper) or 'anisotropic'"),
 }
@@ -677,7 +679,7 @@ PATH_FOLLOWING_DU_MIN = 1e-6
 def _options(p: dict) -> dict:
     """Simulation options of both cases: the solver settings. Under path following the ceiling on
     the growth of the dissipation per step after a cut-back is ngtmc's default, ``"auto"``
-    (:meth:`ngtmc.path_sizing.DissipationSizing.ceiling_applies`): off at quick, where the crack path's
+    (:meth:`ngtmc.stepping.sizing.DissipationSizing.ceiling_applies`): off at quick, where the crack path's
     elements (a median longest edge of 2.6 mm, 2.2 l0) are larger than CEILING_MAX_H = 1.5 l0 and
     a step of one l0 of crack is a fraction of an element (quick, case monotonic: 121 steps and 610
     Newton iterations without it, 207 and 1124 with it; the cyclic case 152 and 678 without it, 294
@@ -698,7 +700,7 @@ def cases(p: dict) -> list[Case]:
     du_min = min(float(p["du_min"]), du_max)
     if p.get("scheme", SOLVER_PARAMETERS["scheme"][0]) == "path-following":   # the floor of its cut-backs only (see _options)
         du_min = min(du_min, PATH_FOLLOWING_DU_MIN)
-    # (under path following the scale doubles after every successful step: ngtmc.path.N_S)
+    # (under path following the scale doubles after every successful step: ngtmc.stepping.path.N_S)
     control = ngtmc.AdaptiveStepControl(du_max=du_max, k_u=float(p["k_u"]), du_min=du_min)
     which = _load_cases(p)
     out = []

@@ -111,7 +111,7 @@ The converged run costs 4.3x the Newton iterations (7159 against 1680).
 
 **Path following gives the converged curve for less work than the lagged one; it is this
 study's default scheme** (``scheme`` = ``path-following``: the monolithic Newton with dissipation
-control while the crack grows, :mod:`ngtmc.path`; ``--set scheme=single-pass`` runs the paper's).
+control while the crack grows, :mod:`ngtmc.stepping.path`; ``--set scheme=single-pass`` runs the paper's).
 Quick: 78 steps, 462 Newton iterations, 2 cut-backs (89 s, idle machine, one thread),
 peak 37.429 N/mm at 0.0948 mm, the converged staggered peak (37.448) to 0.05 %, against 740
 steps, 1680 iterations and 38.763 N/mm (+3.5 %, the lag) single-pass. Paper resolution,
@@ -120,8 +120,8 @@ unattended (2026-11-25, one thread beside two other jobs): 151 steps, 1230 itera
 below the lagged single-pass peak of the same mesh (37.65 N/mm); 1.99 N/mm at 0.15 mm. The crack
 run (peak to 5 N/mm) is 91 of the steps and 811 of the iterations. With ``ngtmc run three-point-bending -r paper`` (two
 threads, otherwise idle machine, 2026-11-25): 153 steps, 1277 iterations, 978 s in all before the
-dissipation step's ceiling (:data:`ngtmc.path_sizing.CEILING_MIN`) and the coupled Newton's own tolerance
-(:data:`ngtmc.coupled.COUPLED_RTOL`); after them **152 steps, 953 iterations, 10 cut-backs, 725 s
+dissipation step's ceiling (:data:`ngtmc.stepping.sizing.CEILING_MIN`) and the coupled Newton's own tolerance
+(:data:`ngtmc.coupled.settings.COUPLED_RTOL`); after them **152 steps, 953 iterations, 10 cut-backs, 725 s
 in all (12.1 min)**, the same peak (36.421 N/mm at 0.09425 mm) and 1.984 N/mm at 0.15 mm. The quick command, ``ngtmc run three-point-bending`` (one thread, the
 default below 20000 elements), takes 89 s on the idle machine (78 steps, 462 iterations, 16.0 s
 of set-up; 103 s with ``pip install -e .`` in a fresh venv). On the same mesh, a tiny-step reference (``python -m benchmarks.peak_reference``:
@@ -143,7 +143,7 @@ Fidelity: variants of one set-up (issue 15; ``docs/fidelity.md`` has the details
 ``--set loading=window`` is Ambati's own set-up: no indenter, no void, no regulariser (order 1
 everywhere); u_y imposed on a ``window_width`` = 0.1 mm window of the beam top at mid-span,
 **tangential free**; Ambati's curve then compares unshifted (42 N/mm at 0.046 mm).
-``--set split=...`` and ``--set formulation=...`` choose the energy split (:mod:`ngtmc.splits`).
+``--set split=...`` and ``--set formulation=...`` choose the energy split (:mod:`ngtmc.model.splits`).
 ``notch_shape`` = ``v`` (V-notch, same depth and mouth width) or ``slit`` (h_band wide, flat tip);
 ``indenter_exclusion`` = a: no fracture in a 2a x a rectangle under the load (region
 ``load_zone``); ``support_exclusion = false``: fracture in the support zones too;
@@ -294,7 +294,9 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.study import SOLVER_PARAMETERS, Case, StudyError, simulation_options
+from ngtmc.study import StudyError
+from ngtmc.study import Case
+from ngtmc.study import SOLVER_PARAMETERS, simulation_options
 
 from ngtmc.studies import _tpb_convergence as _convergence
 from ngtmc.studies import _tpb_elastic as _elastic
@@ -349,7 +351,7 @@ PARAMETERS = {
                                  "(Ambati 2015's set-up: u_y imposed on a window of the beam top, tangential free; "
                                  "no indenter, no void, no regulariser, order 1)"),
     "window_width": (0.1, "mm", "width of the loaded window on the beam top at mid-span (loading = 'window')"),
-    "split": ("vol-dev-J", "-", "tension/compression split (ngtmc.splits.SPLITS): 'vol-dev-J' (paper), "
+    "split": ("vol-dev-J", "-", "tension/compression split (ngtmc.model.splits.SPLITS): 'vol-dev-J' (paper), "
                                 "'vol-dev-small', 'vol-dev-log', 'spectral', 'none'"),
     "formulation": ("hybrid", "-", "where the split acts: 'hybrid' (history only; paper) or 'anisotropic'"),
     "notch_shape": ("flat", "-", "'flat' (notch_width wide, flat tip), 'v' (V-notch of the same depth and "
@@ -438,7 +440,7 @@ def build_mesh(p: dict):
 def check_parameters(p: dict):
     """Raise StudyError naming the parameter if ``loading``, ``split``, ``formulation`` or
     ``notch_shape`` is not one of its values, or if the sizes cannot make the mesh."""
-    from ngtmc.splits import FORMULATIONS, SPLITS
+    from ngtmc.model.splits import FORMULATIONS, SPLITS
     for key, valid in (("loading", _geometry.LOADINGS), ("split", SPLITS), ("formulation", FORMULATIONS),
                        ("notch_shape", _geometry.NOTCH_SHAPES)):
         value = p.get(key, PARAMETERS[key][0])

@@ -92,12 +92,12 @@ steps, 494 and 411 Newton iterations), 1572 s of CPU against 308 s, 972 MB at it
 mm**, 65 steps, 310 Newton iterations, 2 cut-backs; **245 s for the case, 255.5 s (4 min 16 s) for
 the command** (set-up, report and ParaView series included; compiled code cached), 311 MB at its
 peak. The case sizes its dissipation steps before their solve (``coupled={"prescale": True}``,
-:mod:`ngtmc.path`, rule 3): without it, the same day, 57 steps, 400 iterations, 307 s for the
+:mod:`ngtmc.stepping.path`, rule 3): without it, the same day, 57 steps, 400 iterations, 307 s for the
 case and 317 s for the command, the same peak. With the whole void regularised
 (10896 tetrahedra, 19536 u dofs): 6.2013 N at 0.0700 mm, 64 steps, 345 iterations, 363 s on the
 same day (300 s on 2026-12-03), 510 MB. Until 2026-12-02 the crack run after the peak took 13 Newton iterations per step (59 steps,
 463 iterations, 400 s): dissipation steps of half the base failed in cycles, and a factor that
-fails twice now holds the growth ceiling below it (``ngtmc.path_sizing.CEILING_REPEAT``;
+fails twice now holds the growth ceiling below it (``ngtmc.stepping.sizing.CEILING_REPEAT``;
 docs/three-d.md, docs/performance.md).
 The half model at the same sizes peaked at 12.911 N at 0.07314 mm (twice the quarter's: 12.403
 N, **-3.9 %**) in 70 steps and 518 iterations, 3013 s of CPU beside other jobs. On a coarse mesh
@@ -168,7 +168,9 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.study import SOLVER_PARAMETERS, Case, StudyError, simulation_options
+from ngtmc.study import StudyError
+from ngtmc.study import Case
+from ngtmc.study import SOLVER_PARAMETERS, simulation_options
 from ngtmc.studies import _beam3d_geometry as _geometry
 from ngtmc.studies import three_point_bending as _tpb
 
@@ -247,7 +249,7 @@ RESOLUTION_PARAMETERS = {
     "sphere_h_beam": ("mm", "hemisphere: element size in the rest of the beam"),
     "sphere_du_max": ("mm", "hemisphere: largest displacement step of the single-pass, staggered and monolithic "
                              "schemes; under path following (the default) the bound is the larger of this and "
-                             "1/50 of the load path (ngtmc.schemes.PATH_STEPS), so a smaller value has no effect"),
+                             "1/50 of the load path (ngtmc.stepping.schemes.PATH_STEPS), so a smaller value has no effect"),
     "sphere_stop_load": ("mm", "hemisphere: load at which the case stops"),
 }
 DEFAULT_RESOLUTION = "quick"
@@ -413,7 +415,7 @@ def build_plane_strain_scene(p: dict) -> ngtmc.Scene:
 
 def build_slab_scene(p: dict) -> ngtmc.Scene:
     """The 2D scene's mesh extruded into one layer of prisms, u_z held on ``front`` and ``back``."""
-    from ngtmc.extrude import plane_strain_slab
+    from ngtmc.scene.extrude import plane_strain_slab
     return plane_strain_slab(build_plane_strain_scene(p), float(p["slab_thickness"]), name="slab")
 
 

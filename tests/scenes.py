@@ -164,7 +164,7 @@ def homogeneous_state_kept_in_3d(s, order, load=2e-3):
     tolerance (8e-10 measured, order 2)."""
     import numpy as np
     import pytest
-    from ngtmc.displacement_newton import DISPLACEMENT_RTOL
+    from ngtmc.discrete.newton import DISPLACEMENT_RTOL
     e0, f0, H0, e1, f1 = refined_twice_from_homogeneous(s, order, load)
     assert np.ptp(H0) < 1e-10 * H0.max()
     for k in e0:

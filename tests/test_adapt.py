@@ -13,7 +13,7 @@ from netgen.occ import Circle, OCCGeometry, Rectangle
 import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
-from ngtmc.remesh import history_points
+from ngtmc.adapt.remesh import history_points
 from scenes import damaged, notched_plate, refined_twice_from_homogeneous, tension_bar, two_blocks
 
 
@@ -94,7 +94,7 @@ def test_order_two_field_is_transferred_exactly_where_prolongation_is_not():
     # the trap: a plain prolongation of the same variable-order field is not exact
     mesh2 = _copy_mesh(scene.mesh)
     fes2 = ngs.VectorH1(mesh2, order=2)
-    from ngtmc.discretisation import lower_order_outside
+    from ngtmc.discrete.spaces import lower_order_outside
     lower_order_outside(fes2, mesh2, "void")
     g2 = ngs.GridFunction(fes2)
     g2.vec.FV().NumPy()[:] = s.u.vec.FV().NumPy()
@@ -196,7 +196,7 @@ _MATRIX_GROWTH = """
 import os, sys
 import ngsolve as ngs
 from netgen.occ import OCCGeometry, Rectangle
-from ngtmc.discretisation import bilinear_form
+from ngtmc.discrete.spaces import bilinear_form
 
 def rss_mb():
     with open(f"/proc/{os.getpid()}/statm") as fh:
@@ -328,7 +328,7 @@ def test_coupled_newton_follows_the_refined_mesh_without_a_rebuild():
     through a refinement: on the refined mesh its residual and tangent equal those of a
     CoupledNewton built there afresh, in a scene with a phase field and a regulariser (order 2 in
     the void only), and it solves the step."""
-    from ngtmc.coupled import CoupledNewton
+    from ngtmc.coupled.monolithic import CoupledNewton
     base = two_blocks(maxh=0.2, void_maxh=0.05)
     scene = adapt.private_scene(dataclasses.replace(
         base, materials={".*": ngtmc.Material(1000.0, 0.3, 0.05, 0.1)}, fracture_regions="lower|upper"))
@@ -367,8 +367,9 @@ def test_refined_space_keeps_order_one_outside_the_regulariser():
     refinement the solver's displacement space has exactly the dofs of a solver built afresh on
     the refined mesh (order 2 only in the void), and the bare sequence (orders, then Update) is
     still undone, so the trap is there to be avoided."""
-    from ngtmc.discretisation import lower_order_outside
-    from ngtmc.study import load_study, study_parameters
+    from ngtmc.discrete.spaces import lower_order_outside
+    from ngtmc.study import load_study
+    from ngtmc.study import study_parameters
     mod = load_study("three_point_bending")
     _, p = study_parameters(mod, "quick", {"h_band": 0.06})
     scene = adapt.private_scene(mod.build_scene(p))

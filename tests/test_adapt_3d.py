@@ -1,4 +1,4 @@
-"""Adaptive refinement of tetrahedral meshes (ngtmc.adapt, ngtmc.bisection in 3D): the transfer
+"""Adaptive refinement of tetrahedral meshes (ngtmc.adapt, ngtmc.adapt.bisection in 3D): the transfer
 loses nothing (H and alpha never decrease), reproduces a homogeneous state and an order-2 field
 exactly, keeps a curved boundary curved, and the re-solved steps converge and agree with a mesh
 refined beforehand; hexahedra and 3D remeshing are refused (prisms: tests/test_adapt_prisms.py)."""

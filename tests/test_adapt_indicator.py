@@ -5,12 +5,14 @@ when it marks none, nothing is marked."""
 import numpy as np
 import pytest
 
-from ngtmc import adapt, adapt_corridor
+from ngtmc import adapt
+
+from ngtmc.adapt import corridor as adapt_corridor
 from ngtmc.adapt import Adaptivity
 from test_adapt import _damaged_notched_plate
 
 
-def _centroids(mesh):
+def centroids(mesh):
     nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
     return np.asarray(mesh.ngmesh.Coordinates())[:, :2][nodes].mean(axis=1)
 
@@ -20,7 +22,7 @@ def test_lookahead_marks_every_element_within_its_distance():
     base = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0))
     assert 0 < base.sum()
     ahead = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.5, buffer=0, buffer_length=0.15))
-    c = _centroids(s.mesh)
+    c = centroids(s.mesh)
     dist = np.min(np.linalg.norm(c[:, None, :] - c[base][None, :, :], axis=-1), axis=1)
     expected = (dist <= 0.15) & (s.h > 0.03 * (1 + 1e-9))
     np.testing.assert_array_equal(ahead, expected)
@@ -80,10 +82,10 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     crack along y = 0.5, the corridor holds the coarse elements ahead of the front within the
     half width of the crack's line, up to the plate's right edge, and none behind the front or
     off the line; none without damage or without a marked fracture element."""
-    from ngtmc.adapt_corridor import corridor
+    from ngtmc.adapt.corridor import corridor
     w = 0.12
     s = _plate_cracked_to(0.5)
-    c = _centroids(s.mesh)
+    c = centroids(s.mesh)
     front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.5) < 0.06)
     assert front.any()
     a = Adaptivity(h_crack=0.03, corridor=w)
@@ -114,10 +116,10 @@ def test_corridor_runs_on_the_crack_across_the_fronts_opening_not_along_an_off_l
     along x on the crack's line y = 0.5, not through the front's centroid; unstretched (no
     opening), it follows the ray from the front's centroid."""
     import ngsolve as ngs
-    from ngtmc.adapt_corridor import corridor
+    from ngtmc.adapt.corridor import corridor
     w = 0.08
     s = _plate_cracked_to(0.5)
-    c = _centroids(s.mesh)
+    c = centroids(s.mesh)
     front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.6) < 0.06)
     tip = c[front].mean(axis=0)
     a = Adaptivity(h_crack=0.03, corridor=w)
@@ -173,7 +175,8 @@ def test_corridor_waits_for_the_crack_to_run_and_comes_once():
     assert simulation_options({"h_crack": 0.0075})["adapt"].corridor == "auto"
     assert simulation_options({"h_crack": 0.0075, "amr_corridor": 0})["adapt"].corridor == 0.0
     # from the command line (strings): a number, "auto", or a clear refusal
-    from ngtmc.study import StudyError, study_parameters
+    from ngtmc.study import StudyError
+    from ngtmc.study import study_parameters
     from ngtmc.studies import three_point_bending as tpb
     for given, expected in (("0.12", 0.12), ("0", 0.0), ("auto", "auto"), (0.1, 0.1)):
         _, p = study_parameters(tpb, "quick", {"h_crack": "0.015", "amr_corridor": given})
@@ -193,7 +196,7 @@ def test_the_default_corridor_is_four_l0_in_2d_and_none_in_3d():
     import ngsolve as ngs
     import ngtmc
     from ngtmc.adapt import CORRIDOR_L0
-    from ngtmc.solver import Solver
+    from ngtmc.discrete.solver import Solver
     from scenes import notched_plate, tension_bar
     assert Adaptivity(h_crack=0.01).corridor == "auto" and CORRIDOR_L0 == 4.0
     with pytest.raises(ValueError, match="corridor = 'wide'"):
@@ -239,7 +242,7 @@ def test_the_default_corridor_is_four_l0_in_2d_and_none_in_3d():
 
 
 def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_edges():
-    """Remeshed (ngtmc.remesh), the corridor holds every coarse fracture element with its centroid
+    """Remeshed (ngtmc.adapt.remesh), the corridor holds every coarse fracture element with its centroid
     or a vertex in the strip (more than by bisection, which refines whole elements by their
     centroids), and the remesher keeps their restrictions to the strip: the new mesh is fine
     along the crack's line ahead of the front and coarse beyond the strip's half width plus the
@@ -247,12 +250,12 @@ def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_
     import dataclasses
     import ngsolve as ngs
     import ngtmc
-    from ngtmc import remesh
-    from ngtmc.adapt_corridor import corridor, strip
+    from ngtmc.adapt import remesh
+    from ngtmc.adapt.corridor import corridor, strip
     w, h = 0.08, 0.03
     s = _plate_cracked_to(0.5)
     s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))
-    c = _centroids(s.mesh)
+    c = centroids(s.mesh)
     front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.5) < 0.06)
     a = Adaptivity(h_crack=h, corridor=w, remesh_maxh=0.2)
     rm = remesh.Remesher(s.mesh, 0.2)
@@ -266,7 +269,7 @@ def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_
     kept = rm.add(s.mesh, extra, t, within=line.contains)
     assert len(kept) and line.contains(kept[:, :2]).all() and not line.contains(whole[:, :2]).all()
     fine = ngtmc.Solver(dataclasses.replace(s.scene, mesh=rm.mesh()))
-    cf = _centroids(fine.mesh)
+    cf = centroids(fine.mesh)
     ahead = (cf[:, 0] > line.origin[0] + w) & (cf[:, 0] < 0.95)
     on_line = ahead & (np.abs(cf[:, 1] - 0.5) < w - h)
     outside = ahead & (np.abs(cf[:, 1] - 0.5) > w + 3 * h)

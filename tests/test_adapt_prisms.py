@@ -1,4 +1,4 @@
-"""Adaptive refinement of an extruded slab of prisms (ngtmc.extrude; ngtmc.adapt, ngtmc.bisection):
+"""Adaptive refinement of an extruded slab of prisms (ngtmc.scene.extrude; ngtmc.adapt, ngtmc.adapt.bisection):
 NGSolve bisects a prism across its triangles only, so the slab keeps its layers; u is carried
 exactly at order 2 (through a copy of the mesh, where NGSolve's prolongation loses the quadratic
 part and its exact prolongation is not available), H and alpha never decrease, a homogeneous
@@ -11,14 +11,14 @@ import pytest
 import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
-from ngtmc.extrude import plane_strain_slab
+from ngtmc.scene.extrude import plane_strain_slab
 from scenes import (bar_mesh, damaged, homogeneous_state_kept_in_3d, notched_plate, plain_prolongation_error,
                     refine_and_check_the_transfer_in_3d)
 
 
 def test_prisms_are_bisected_across_their_triangles_and_an_order_two_field_is_carried_exactly():
     """The traps: NGSolve has no exact (``hoprolongation``) prolongation on prisms of order 2, and
-    its plain prolongation loses the quadratic part (0.021 here, measured); ngtmc.bisection
+    its plain prolongation loses the quadratic part (0.021 here, measured); ngtmc.adapt.bisection
     carries u through a copy of the mesh instead (6e-15 measured). The refined slab keeps its two
     faces and its prisms."""
     x, y, z = ngs.x, ngs.y, ngs.z

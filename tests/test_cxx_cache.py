@@ -1,4 +1,4 @@
-"""The cache of compiled expression code (ngtmc/cxx_cache.py): a second process reuses the object
+"""The cache of compiled expression code (ngtmc/discrete/cxx_cache.py): a second process reuses the object
 files of the first, and the compiled expression gives the uncompiled one's numbers."""
 import os
 import subprocess
@@ -7,12 +7,11 @@ import textwrap
 
 import pytest
 
-from ngtmc import cxx_cache
-
+from ngtmc.discrete import cxx_cache
 SCRIPT = textwrap.dedent("""
     import ngsolve as ngs
     from netgen.geom2d import unit_square
-    from ngtmc.discretisation import real_compile
+    from ngtmc.discrete.spaces import real_compile
     mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.3))
     F = ngs.CF((1 + 0.1 * ngs.x, 0.2 * ngs.y, 0.05 * ngs.x * ngs.y, 1 - 0.1 * ngs.y), dims=(2, 2))
     J = ngs.Det(F)
@@ -36,7 +35,7 @@ def _compile_in_a_new_process(cache, *argv):
 
 
 def test_a_second_process_reuses_the_compiled_code(tmp_path):
-    from ngtmc import discretisation
+    from ngtmc.discrete import spaces as discretisation
     if discretisation._REAL_COMPILE_FAILED:
         pytest.skip("no C++ compiler here")
     first = _compile_in_a_new_process(tmp_path)
@@ -54,7 +53,7 @@ def test_the_same_expression_compiled_with_other_pointer_numbers_is_a_hit(tmp_pa
     its solver's five expressions again: 30-45 s per remesh on the quick three-point bending,
     measured). The cache keys on the text with the pointers numbered by first appearance and
     renames the symbols of the stored object; the renamed object gives the same numbers."""
-    from ngtmc import discretisation
+    from ngtmc.discrete import spaces as discretisation
     if discretisation._REAL_COMPILE_FAILED:
         pytest.skip("no C++ compiler here")
     import shutil
@@ -82,7 +81,7 @@ def test_a_process_with_another_cache_never_calls_a_wrapper_as_its_compiler(tmp_
     the parent's wrapper first. Its real ngscxx must still be NGSolve's, not that wrapper: a
     wrapper that calls a wrapper called itself without end (measured: processes until the
     machine ran out of memory)."""
-    from ngtmc import discretisation
+    from ngtmc.discrete import spaces as discretisation
     if discretisation._REAL_COMPILE_FAILED:
         pytest.skip("no C++ compiler here")
     import sysconfig

@@ -5,9 +5,9 @@ import ngsolve as ngs
 import pytest
 from netgen.geom2d import unit_square
 
-from ngtmc import contact_regularisation as creg
-from ngtmc import fracture
-from ngtmc.materials import psi_dev, psi_vol
+from ngtmc.model import regularisation as creg
+from ngtmc.model import fracture
+from ngtmc.model.materials import psi_dev, psi_vol
 
 
 @pytest.fixture(scope="module")
@@ -99,8 +99,8 @@ def test_phase_field_equation_is_the_derivative_of_its_energy(mesh):
     assert np.linalg.norm(r.FV().NumPy() - lin_res.FV().NumPy()) < 1e-10 * np.linalg.norm(r.FV().NumPy())
 
 
-# ---------------------------------------------------------------------- energy splits (ngtmc.splits)
-from ngtmc import splits as _splits  # noqa: E402
+# ---------------------------------------------------------------------- energy splits (ngtmc.model.splits)
+from ngtmc.model import splits as _splits  # noqa: E402
 
 
 @pytest.mark.parametrize("name", _splits.SPLITS)

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from ngtmc.study import STUDIES, load_study, study_parameters
+from ngtmc.study import STUDIES, load_study
+from ngtmc.study import study_parameters
 from study_expected import check_expected, record_problems
 
 TESTS = Path(__file__).resolve().parent

@@ -1,12 +1,12 @@
-"""Extruded slabs (ngtmc.extrude): the mesh, and a 3D plane-strain run against its 2D twin."""
+"""Extruded slabs (ngtmc.scene.extrude): the mesh, and a 3D plane-strain run against its 2D twin."""
 import numpy as np
 import ngsolve as ngs
 import pytest
 from netgen.occ import Glue, MoveTo, OCCGeometry, Rectangle
 
 import ngtmc
-from ngtmc.contact_regularisation import phi_bar
-from ngtmc.extrude import plane_strain_slab
+from ngtmc.model.regularisation import phi_bar
+from ngtmc.scene.extrude import plane_strain_slab
 from scenes import notched_plate
 
 
@@ -83,7 +83,7 @@ def test_plane_strain_slab_reproduces_the_2d_run_through_the_crack():
     after the first state past the peak (which has two equilibria at its dissipation, see below),
     and the ends agree to 1e-4 (measured 6.5e-6 in dissipated energy, 3.4e-7 of the peak in
     force). The slab's order-1 prisms are integrated at the triangle's centroid times two points
-    through the thickness (:func:`ngtmc.discretisation.term_rules`), its 2D twin's triangles at
+    through the thickness (:func:`ngtmc.discrete.spaces.term_rules`), its 2D twin's triangles at
     the centroid: through the peak the two runs agree to 4e-11.
 
     Both runs use UMFPACK, which solves bitwise alike from run to run (sparsecholesky is not

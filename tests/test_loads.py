@@ -154,7 +154,7 @@ def test_adjoint_with_a_field_load_and_refusal_of_tractions():
     sc.load = ngtmc.DisplacementField("right", lambda x, y, lam: (lam + 0 * x, 0 * y), components="x")
     g, path = S.differentiate(sc, 0.01, S.ReactionAtStep(-1), wrt=("E",), newton=ngtmc.NewtonOptions(rtol=1e-12))
     assert g["E"] == pytest.approx(g["value"] / 1000.0, rel=1e-6)
-    # a replay takes the runs' own step (ngtmc.schemes.alpha_u_passes): with nothing that may
+    # a replay takes the runs' own step (ngtmc.stepping.schemes.alpha_u_passes): with nothing that may
     # break, the history stays as recorded (zero), not Psi_plus of the elastic bar
     r = S.replay(path)
     assert np.allclose(r.forces, path.forces, rtol=1e-10, atol=0)

@@ -8,7 +8,7 @@ from netgen.csg import unit_cube
 from netgen.geom2d import unit_square
 
 from ngtmc import Material
-from ngtmc.materials import gamma_interpolation, gc_interpolation, psi_bar, psi_dev, psi_plus, psi_vol
+from ngtmc.model.materials import gamma_interpolation, gc_interpolation, psi_bar, psi_dev, psi_plus, psi_vol
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The monolithic scheme (ngtmc.coupled): its residual is the hybrid AT-2 system of Eq. 16 with
+"""The monolithic scheme (ngtmc.coupled.monolithic): its residual is the hybrid AT-2 system of Eq. 16 with
 H_n = max(H_{n-1}, Psi_plus(u)) inside the step, its tangent is the derivative of that residual,
 and it removes the one-step damage lag of the paper's single-pass scheme."""
 import math
@@ -8,7 +8,7 @@ import ngsolve as ngs
 import pytest
 
 import ngtmc
-from ngtmc.coupled import CoupledNewton
+from ngtmc.coupled.monolithic import CoupledNewton
 from scenes import notched_plate, tension_bar, two_blocks
 
 
@@ -183,7 +183,7 @@ def test_levenberg_solve_of_block_gmres_is_that_of_the_shifted_matrix(mu):
     the shifted diagonal, operator = restored matrix + shift) gives the UMFPACK solution of the
     matrix whose free diagonal is scaled by (1 + mu), to the GMRES tolerance; the assembled
     matrix is left unchanged, and a normal factorization after it solves the unshifted matrix."""
-    from ngtmc.coupled_linear import CoupledLinearSolver
+    from ngtmc.coupled.linear import CoupledLinearSolver
     s, c = _damaged_state(seed=3)
     c.form.AssembleLinearization(c.x.vec)
     A = c.form.mat
@@ -218,7 +218,7 @@ def test_block_gmres_solution_failing_its_true_residual_is_solved_by_umfpack(mon
     residual): one whose true residual exceeds GMRES_TRUE_RTOL of the right-hand side is replaced
     by the UMFPACK solution, and counted. With the threshold at 0 every solve fails the check; at
     its value none does on this state."""
-    import ngtmc.coupled_linear as cl
+    import ngtmc.coupled.linear as cl
     s, c = _damaged_state(seed=3)
     c.form.AssembleLinearization(c.x.vec)
     free = c._free_base.copy()
@@ -249,7 +249,7 @@ def test_block_gmres_reuses_its_u_factor_while_it_pays_and_solves_the_current_ma
     """FACTOR_REUSE: with an older u-u factor GMRES still solves the current matrix (to UMFPACK's
     solution); a new factor is made once the extra GMRES time reaches the factorization's, for a
     shifted (Levenberg) direction and after it, and for a solve that failed with the older one."""
-    import ngtmc.coupled_linear as cl
+    import ngtmc.coupled.linear as cl
     s, c = _damaged_state(seed=5)
     free = c._free_base.copy()
     free[:c.nu] &= ~s._dir_np

@@ -1,4 +1,4 @@
-"""One scene on several MPI ranks (ngtmc.distributed): the history at 3 ranks equals the serial one,
+"""One scene on several MPI ranks (ngtmc.scene.distributed): the history at 3 ranks equals the serial one,
 and the NGSolve traps that make this need explicit reductions are pinned.
 
 Needs mpi4py and an MPI launcher (``pip install ngtmc[mpi]``: the mpi4py and mpich wheels, which
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import ngtmc
-from ngtmc.distributed import Ranks, unsupported
+from ngtmc.scene.distributed import Ranks, unsupported
 from ngtmc.study import StudyError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -89,7 +89,7 @@ def test_three_ranks_reproduce_the_serial_history_through_contact_and_a_crack(ru
 
 
 def test_ngsolve_energies_and_integrals_are_rank_local_on_a_distributed_mesh(runs):
-    """The traps ngtmc.distributed.Ranks exists for: BilinearForm.Energy and Integrate(cf * dx)
+    """The traps ngtmc.scene.distributed.Ranks exists for: BilinearForm.Energy and Integrate(cf * dx)
     return each rank's part (a wrong total, no error); Integrate(cf, mesh) is summed."""
     par, serial = runs
     local = par["ranks_local"]
@@ -115,7 +115,7 @@ def test_serial_reductions_are_the_plain_values_and_unsupported_inputs_are_named
     r = Ranks(sc.mesh)
     assert not r.parallel and r.sum(2.5) == 2.5 and r.min(np.array([3.0, 1.0])) == 1.0
     assert r.max(np.zeros(0)) == -np.inf and r.any(True) and not r.all(False)
-    assert ngtmc.distributed.distribute(sc, comm=_SingleRank()) is sc
+    assert ngtmc.scene.distributed.distribute(sc, comm=_SingleRank()) is sc
     msgs = unsupported(sc, adapt=object(), out_dir="x")
     assert len(msgs) == 2 and "adaptive refinement" in msgs[0]
 

@@ -203,7 +203,9 @@ def test_costliest_cases_start_first():
     """On a cluster the cases start in descending Case.cost (the study's order among equal costs);
     step_control gives its k_u = 1000 cases, the longest of its recorded runs, the highest cost."""
     from ngtmc.runner.parallel import costliest_first
-    from ngtmc.study import Case, load_study, study_parameters
+    from ngtmc.study import load_study
+    from ngtmc.study import Case
+    from ngtmc.study import study_parameters
     todo = [(0, Case("a")), (1, Case("b", cost=5.0)), (2, Case("c")), (3, Case("d", cost=2.5))]
     assert [c.name for _, c in costliest_first(todo)] == ["b", "d", "a", "c"]
     with pytest.raises(ValueError, match="cost"):

@@ -1,4 +1,4 @@
-"""Path following of the monolithic scheme (ngtmc.path, CoupledNewton.solve with ``dissipation``):
+"""Path following of the monolithic scheme (ngtmc.stepping.path, CoupledNewton.solve with ``dissipation``):
 the dissipation it controls is that of the recorded history, a dissipation step ends in an
 equilibrium of the fixed-load problem at the load it found, and a crack that snaps back is
 followed through the snap-back in a few steps."""
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import ngtmc
-from ngtmc.coupled import CoupledNewton
+from ngtmc.coupled.monolithic import CoupledNewton
 from scenes import notched_plate
 
 
@@ -109,7 +109,7 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
     """coupled={"growth_ceiling": False}: a cut-back sets no ceiling; the growth factor is kept (the
     step control's halved scale alone shrinks the next steps until it recovers) and easy steps
     double it as before (the L-panel's long crack run, docs/performance.md)."""
-    from ngtmc.path_sizing import GROWTH_MAX
+    from ngtmc.stepping.sizing import GROWTH_MAX
     path, step = _growth_stepper(growth_ceiling=False)
     assert path.sizing.option is False
 
@@ -120,7 +120,7 @@ def test_without_the_growth_ceiling_a_cut_back_sets_none():
 
 
 def test_a_dissipation_step_predicted_past_du_max_is_scaled_before_it_is_solved():
-    """Rule 3 of ngtmc.path before the solve (``prescale``, off by default): after a
+    """Rule 3 of ngtmc.stepping.path before the solve (``prescale``, off by default): after a
     dissipation step, where the secant through the last two states moves the load by more than
     du_max, dD (and the growth factor) is scaled down at once. Both runs follow the same curve
     (the peaks, sampled by different steps, within 0.5 %) and break the plate; no accepted
@@ -192,7 +192,7 @@ def test_displacement_steps_of_path_following_are_bounded_by_the_curve_resolutio
     """Under path following a displacement step carries no lag, so its bound is 1/PATH_STEPS of
     the load path (or ``coupled["du_max"]``), not the lagged schemes' du_max: the first step of
     the plate (elastic, nothing dissipates yet) is 0.012/50 mm with du_max = 1e-4 mm."""
-    from ngtmc.simulation import PATH_STEPS
+    from ngtmc.simulation.loop import PATH_STEPS
     control = ngtmc.AdaptiveStepControl(du_max=1e-4, du_min=1e-7)
     sim = ngtmc.Simulation(_plate(), 0.012, control, scheme="path-following")
     assert sim.control.du_max == pytest.approx(0.012 / PATH_STEPS)
@@ -233,7 +233,7 @@ def test_a_cut_back_sets_a_ceiling_on_the_growth_of_the_dissipation_step():
     until GROWTH_CEILING_STEPS easy steps at it double it (so a tail that failed at 16x runs at 8x,
     not in cycles of 1, 2, 4, 8, 16, and a crack run that failed at the base runs at half of it
     also after the step control's scale has recovered)."""
-    from ngtmc.path_sizing import CEILING_MIN, GROWTH_CEILING_STEPS, GROWTH_MAX
+    from ngtmc.stepping.sizing import CEILING_MIN, GROWTH_CEILING_STEPS, GROWTH_MAX
     path, step = _growth_stepper()
 
     path.sizing.growth = 1.0
@@ -293,7 +293,7 @@ def test_a_very_easy_step_at_the_ceiling_doubles_it_at_once():
     """A step at the ceiling that took at most CEILING_EASY_ITERATIONS Newton iterations doubles the
     ceiling at once, forward or snap-back (the quick L-panel's crack run, where steps at half the base
     take 2-3 iterations, would otherwise run at half the base for 16 steps after each cut-back)."""
-    from ngtmc.path_sizing import CEILING_EASY_ITERATIONS, GROWTH_MAX
+    from ngtmc.stepping.sizing import CEILING_EASY_ITERATIONS, GROWTH_MAX
     path, step = _growth_stepper()
 
     path.sizing.growth = 1.0
@@ -337,7 +337,7 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
     J > 0: here the full secant is refused once, so the predictor is u_n + 0.5 (u_n - u_{n-1}) on
     the free dofs, the boundary values those of the step's load, and alpha as extrapolated by
     half, kept in [alpha_n, 1]. If every fraction inverts, the state is left as it was."""
-    from ngtmc.secant import SECANT_DAMPING
+    from ngtmc.stepping.secant import SECANT_DAMPING
     assert SECANT_DAMPING[0] == 1.0 and SECANT_DAMPING[1] == 0.5
     sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
                            scheme="path-following")
@@ -370,7 +370,7 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
 
 def _failing_dissipation(sim):
     """Make every dissipation solve of ``sim`` fail."""
-    from ngtmc.displacement_newton import NewtonResult
+    from ngtmc.discrete.newton import NewtonResult
     c = sim.coupled
     solve = c.solve
 
@@ -385,7 +385,7 @@ def _failing_dissipation(sim):
 def test_path_following_takes_a_displacement_step_where_the_damage_does_not_respond():
     """Where the last attempt of a step (du < 2 du_min) fails as a dissipation step (the crack has
     arrested, or the solve stalled at every dD), the step becomes a displacement step of du
-    (rule 3 of ngtmc.path): with every dissipation solve failing, the run goes on by displacement
+    (rule 3 of ngtmc.stepping.path): with every dissipation solve failing, the run goes on by displacement
     steps alone (to 0.0055 mm, before the snap-back, which fixed-load steps cannot pass); where
     that displacement step fails too, the run fails at du_min with both messages."""
     def sim():
@@ -453,7 +453,7 @@ def test_a_factor_that_fails_again_holds_the_ceiling_below_it():
     and one very easy step no longer doubles it: only GROWTH_CEILING_STEPS easy steps do (the quick
     3D hemisphere's crack run, where steps at a quarter of the base take 3 Newton iterations and
     steps at half of it failed in cycles). The rule's state is part of the checkpoint."""
-    from ngtmc.path_sizing import CEILING_EASY_ITERATIONS, CEILING_MIN, GROWTH_CEILING_STEPS
+    from ngtmc.stepping.sizing import CEILING_EASY_ITERATIONS, CEILING_MIN, GROWTH_CEILING_STEPS
     path, step = _growth_stepper()
 
     # the first failure, at CEILING_MIN: the ceiling stays at CEILING_MIN, and an easy step

@@ -1,4 +1,4 @@
-"""The peak of a force-load curve has one definition (ngtmc.runfiles.peak): the runner's results,
+"""The peak of a force-load curve has one definition (ngtmc.simulation.history.peak): the runner's results,
 the report's key numbers and reference peaks, SimulationResult and the benchmark harness all give
 the same peak of a hand-made history."""
 import math
@@ -11,7 +11,7 @@ import pytest
 
 import ngtmc
 from ngtmc.report.numbers import case_numbers, reference_peaks
-from ngtmc.runfiles import peak, peak_index
+from ngtmc.simulation.history import peak, peak_index
 from ngtmc.runner import case_results
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

@@ -1,5 +1,5 @@
-"""The secant predictor of the displacement Newton (ngtmc.schemes.StepSchemes._predict_displacement,
-ngtmc.secant.secant_displacement): the same converged states as the start from the
+"""The secant predictor of the displacement Newton (ngtmc.stepping.schemes.StepSchemes._predict_displacement,
+ngtmc.stepping.secant.secant_displacement): the same converged states as the start from the
 last accepted step, fewer Newton iterations, no extrapolation across a load reversal, and a
 checkpoint that keeps the secant's point (seconds)."""
 from __future__ import annotations
@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 import ngtmc
-from ngtmc.schemes import StepSchemes
-from ngtmc.stepping import AdaptiveStepControl, Schedule
+from ngtmc.stepping.schemes import StepSchemes
+from ngtmc.stepping.control import AdaptiveStepControl, Schedule
 
 from scenes import tension_bar, two_blocks
 

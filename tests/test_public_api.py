@@ -1,5 +1,5 @@
 """The package's public names: every name a module lists in ``__all__`` exists, so that
-``from ngtmc.<module> import *`` works (it raised AttributeError for ``ngtmc.runfiles``, whose
+``from ngtmc.<module> import *`` works (it raised AttributeError for ``ngtmc.study.run_files``, whose
 ``__all__`` named a class that had moved to ``ngtmc.runner.checkpoints``)."""
 import importlib
 import pkgutil
@@ -13,7 +13,7 @@ MODULES = sorted(m.name for m in pkgutil.walk_packages(ngtmc.__path__, "ngtmc.")
 
 
 def test_the_package_has_modules_to_check():
-    assert len(MODULES) > 30 and "ngtmc.runfiles" in MODULES
+    assert len(MODULES) > 30 and "ngtmc.study.run_files" in MODULES
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -6,7 +6,7 @@ import ngsolve as ngs
 import pytest
 
 import ngtmc
-from ngtmc.materials import psi_bar
+from ngtmc.model.materials import psi_bar
 from scenes import bar_mesh
 
 

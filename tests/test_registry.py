@@ -1,4 +1,4 @@
-"""The library finds named studies through its registry (ngtmc.study.STUDIES and the entry points
+"""The library finds named studies through its registry (ngtmc.study.registry.STUDIES and the entry points
 of the group "ngtmc.studies"), never by scanning or importing a package of studies. The studies of
 ngtmc live in the folder studies/ at the top of the repository and import as ngtmc.studies
 (pyproject package-dir; from a source tree, the finder of ngtmc/__init__.py): there is no top-level
@@ -10,7 +10,8 @@ import sys
 
 import pytest
 
-from ngtmc.study import ENTRY_POINT_GROUP, STUDIES, StudyError, list_studies, load_study, registered_studies
+from ngtmc.study.registry import ENTRY_POINT_GROUP, STUDIES, list_studies, load_study, registered_studies
+from ngtmc.study import StudyError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -52,7 +53,7 @@ def test_studies_import_as_ngtmc_studies_from_this_tree(tmp_path):
 @pytest.mark.parametrize("name", sorted(STUDIES))
 def test_study_file_runs_as_a_script_and_loads_from_its_path(name, tmp_path):
     """`python studies/NAME.py --help` from another folder (its imports of ngtmc.studies resolve),
-    and `ngtmc run studies/NAME.py` imports the file by path (ngtmc.study.load_study_file)."""
+    and `ngtmc run studies/NAME.py` imports the file by path (ngtmc.study.registry.load_study_file)."""
     r = _python([str(ROOT / "studies" / f"{name}.py"), "--help"], tmp_path, timeout=120)
     assert r.returncode == 0, r.stderr
     assert "usage:" in r.stdout and "--resolution" in r.stdout, r.stdout
@@ -115,5 +116,5 @@ def test_added_at_default_names_the_studys_parameters(tmp_path, added, message):
         load_study(str(f))
     f.write_text(_STUDY + "\nADDED_AT_DEFAULT = ('E',)\n")
     mod = load_study(str(f))
-    from ngtmc.study import added_at_default
+    from ngtmc.study.parameters import added_at_default
     assert added_at_default(mod)["E"] == 1000.0

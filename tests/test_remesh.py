@@ -1,4 +1,4 @@
-"""Refinement by remeshing (ngtmc.remesh): the geometry meshed again gives the scene's mesh back,
+"""Refinement by remeshing (ngtmc.adapt.remesh): the geometry meshed again gives the scene's mesh back,
 a wrong maxh is refused, the state crosses the non-nested meshes (a homogeneous state exactly, H
 never below the old element's largest value where the mesh is refined, linear fields exactly
 elsewhere, alpha the old field at the new vertices), the refined zone comes out at its target
@@ -11,10 +11,12 @@ import ngsolve as ngs
 import pytest
 
 import ngtmc
-from ngtmc import adapt, carried_state, remesh
+from ngtmc import adapt
+from ngtmc.adapt import carried_state
+from ngtmc.adapt import remesh
 from ngtmc.adapt import Adaptivity
-from ngtmc.remesh import history_points
-from ngtmc.scene import element_vertices
+from ngtmc.adapt.remesh import history_points
+from ngtmc.scene.regions import element_vertices
 from scenes import damaged, notched_plate
 
 MAXH = 0.2   # mm, the notched plate's global size below
@@ -42,11 +44,11 @@ def test_refined_zone_reaches_its_target_and_is_not_refined_again():
     s = ngtmc.Solver(scene)
     rm = remesh.Remesher(scene.mesh, MAXH)
     a = Adaptivity(h_crack=0.025, remesh_maxh=MAXH)
-    c = adapt._centroids(s.mesh)
+    c = adapt.centroids(s.mesh)
     marked = np.hypot(c[:, 0] - 0.3, c[:, 1] - 0.5) < 0.15       # around the notch tip
     rm.add(s.mesh, marked, adapt.targets(s, a))
     fine = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()))
-    cf = adapt._centroids(fine.mesh)
+    cf = adapt.centroids(fine.mesh)
     near = np.hypot(cf[:, 0] - 0.3, cf[:, 1] - 0.5) < 0.1
     print(f"\nremeshed: {s.mesh.ne} -> {fine.mesh.ne} elements; near the tip median longest edge "
           f"{np.median(fine.h[near]):.4f} mm (target 0.025 mm)")
@@ -67,7 +69,7 @@ def test_homogeneous_state_is_reproduced_exactly():
     s.alpha_committed[:] = 0.125
     energy = s.energies()
     rm = remesh.Remesher(scene.mesh, MAXH)
-    c = adapt._centroids(s.mesh)
+    c = adapt.centroids(s.mesh)
     marked = np.hypot(c[:, 0] - 0.6, c[:, 1] - 0.3) < 0.2
     rm.add(s.mesh, marked, adapt.targets(s, Adaptivity(h_crack=0.03)))
     new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)
@@ -104,7 +106,7 @@ def test_history_never_decreases_where_refined_and_alpha_is_the_old_field_at_the
     # everywhere: within the range of the old element's values (no new extremes)
     assert np.all(H_new >= H_old.min(axis=1)[where] - 1e-12) and np.all(H_new <= H_old.max(axis=1)[where] + 1e-12)
     # alpha: the old P1 field at every new vertex of the fracture region
-    xy = adapt._coordinates(new.mesh)
+    xy = adapt.coordinates(new.mesh)
     a_old = ngs.GridFunction(s.fes_a)
     a_old.vec.FV().NumPy()[:] = s.alpha_committed
     frac_vertices = np.unique(element_vertices(new.mesh))   # the plate is all fracture region
@@ -230,7 +232,7 @@ def test_linear_history_is_carried_exactly():
     xy = history_points(s)
     s.H_committed[:] = 3.0 + 2.0 * xy[:, 0] - 1.5 * xy[:, 1]
     rm = remesh.Remesher(scene.mesh, MAXH)
-    c = adapt._centroids(s.mesh)
+    c = adapt.centroids(s.mesh)
     marked = np.hypot(c[:, 0] - 0.5, c[:, 1] - 0.5) < 0.2
     rm.add(s.mesh, marked, adapt.targets(s, Adaptivity(h_crack=0.03)))
     new = ngtmc.Solver(dataclasses.replace(scene, mesh=rm.mesh()), compile=True)

@@ -15,9 +15,11 @@ import sys
 import pandas as pd
 import pytest
 
-from ngtmc.runfiles import CheckpointWarning, effective_status, parameters_hash
+from ngtmc.study.run_files import CheckpointWarning, effective_status
+from ngtmc.study.parameters import parameters_hash
 from ngtmc.runner import run_study
-from ngtmc.study import ADDED_AT_DEFAULT, INERT_WITHOUT_REFINEMENT, StudyError
+from ngtmc.study import StudyError
+from ngtmc.study.parameters import ADDED_AT_DEFAULT, INERT_WITHOUT_REFINEMENT
 
 from test_runner import _physics, tiny_study  # noqa: E402
 
@@ -204,11 +206,12 @@ def test_refused_run_leaves_no_folder(tmp_path):
 
 def test_a_refined_run_recorded_before_the_default_corridor_resumes_without_one(tmp_path):
     """amr_corridor's default changed from 0 (none) to "auto" (4 l0) on 2026-12-06
-    (ngtmc.study.DEFAULT_CHANGED): a refined run recorded before, with amr_corridor at 0 or not
+    (ngtmc.study.registry.DEFAULT_CHANGED): a refined run recorded before, with amr_corridor at 0 or not
     named at all, resumes with no corridor; one recorded after resumes with "auto"; one recorded
     with a width given resumes with it."""
-    from ngtmc.runfiles import resume_parameters, run_description
-    from ngtmc.study import DEFAULT_CHANGED, load_study, simulation_options, study_parameters
+    from ngtmc.study.parameters import resume_parameters, run_description
+    from ngtmc.study import load_study
+    from ngtmc.study.parameters import DEFAULT_CHANGED, simulation_options, study_parameters
     assert DEFAULT_CHANGED == {"amr_corridor": 0.0}
     mod = load_study("three_point_bending")
     res, p = study_parameters(mod, "quick", {"h_crack": 0.015})
@@ -234,8 +237,9 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     """The adaptivity settings (h_crack, amr_lookahead, amr_h_void) have no effect while h_crack is
     0: they are not in the parameter hash, and a run recorded before they existed resumes; a run
     recorded with refinement on does not resume without it."""
-    from ngtmc.runfiles import resume_parameters, run_description
-    from ngtmc.study import load_study, study_parameters
+    from ngtmc.study.parameters import resume_parameters, run_description
+    from ngtmc.study import load_study
+    from ngtmc.study import study_parameters
     mod = load_study("l_panel")
     res, p = study_parameters(mod, "quick", {})
     assert p["h_crack"] == 0.0

@@ -14,7 +14,10 @@ import pytest
 
 import ngtmc
 from ngtmc.runner import HISTORY_COLUMNS, run_study, write_atomic
-from ngtmc.study import Case, StudyError, list_studies, load_study, study_parameters
+from ngtmc.study import list_studies, load_study
+from ngtmc.study import StudyError
+from ngtmc.study import Case
+from ngtmc.study import study_parameters
 
 TIMING_COLUMNS = ["wall_time", "solve_time", "assembly_time"]
 
@@ -293,8 +296,9 @@ def test_history_columns_defined_once():
     """simulation, runner, report and docs/run-directory.md agree on the history columns and units."""
     import pathlib
     import re
-    from ngtmc import report, runfiles, runner, simulation
-    assert simulation.HISTORY_UNITS is runfiles.HISTORY_UNITS and ngtmc.HISTORY_UNITS is runfiles.HISTORY_UNITS
+    from ngtmc import report, runner
+    from ngtmc.simulation import history as runfiles      # the history schema's one owner
+    assert ngtmc.HISTORY_UNITS is runfiles.HISTORY_UNITS
     assert runner.HISTORY_COLUMNS == ["case", *runfiles.HISTORY_UNITS]
     assert list(report.HISTORY_COLUMNS) == runner.HISTORY_COLUMNS
     assert all(report.HISTORY_COLUMNS[k] == u for k, u in runfiles.HISTORY_UNITS.items() if k != "force")
@@ -307,7 +311,7 @@ def test_history_columns_defined_once():
 def test_checkpoint_state_by_name_and_the_positional_form_still_loads():
     """The Simulation state is stored by name (JSON, floats exact); a checkpoint in the older
     positional form (``scalars``, ``control``) decodes to the same state."""
-    from ngtmc.runner import _Run
+    from ngtmc.runner.cases import _Run
     state = {"t": 0.0123456789012345, "step": 7, "last_delta_wf": 1.5e-7, "wf_prev": 0.25, "elapsed": 3.5,
              "control": {"scale": 0.5, "successes": 2}}
     common = {"done": np.array(False), "rows": np.array("[]"), "results": np.array("{}"),
@@ -325,7 +329,7 @@ def test_auto_threads_follow_the_mesh_size(monkeypatch):
     elements (AUTO_TWO_THREADS_ELEMENTS_3D in 3D) in its built scene (a second thread made the
     quick three-point bending 1.75x slower), two from there; a case whose scene is not built gets
     one."""
-    import ngtmc.runner as runner
+    import ngtmc.runner.study_run as runner
     from ngtmc.study import study_parameters
     mod = tiny_study()
     _, p = study_parameters(mod, "quick")
@@ -343,7 +347,7 @@ def test_auto_threads_follow_the_mesh_size(monkeypatch):
 def test_auto_threads_are_chosen_and_recorded_per_case(tmp_path, monkeypatch):
     """A serial run with threads="auto" runs each case in its own TaskManager with the count
     case_threads gives it, and records the count that was active in the case's metadata."""
-    import ngtmc.runner as runner
+    import ngtmc.runner.study_run as runner
     mod = tiny_study(names=("a", "b"))
     monkeypatch.setattr(runner, "case_threads", lambda c: {"a": 2, "b": 1}[c.name])
     out = run_study(mod, output=tmp_path / "run", report=False, progress=False)

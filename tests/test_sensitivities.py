@@ -167,7 +167,8 @@ def test_unloading_after_cracking():
     unload = np.nonzero(np.diff(lam) < 0)[0] + 1
     assert len(unload) >= 3
     sets = S.active_sets(up)
-    eng = S._engine(up)
+    from ngtmc.sensitivities.adjoint import _engine
+    eng = _engine(up)
     ind = ngs.GridFunction(up.solver.irs)
     ind.Interpolate(eng.frac_ind)
     in_beam = ind.vec.FV().NumPy() > 0.5

@@ -1,4 +1,4 @@
-"""Discrete adjoint of the monolithic schemes (ngtmc.sensitivities_coupled) against finite differences.
+"""Discrete adjoint of the monolithic schemes (ngtmc.sensitivities.coupled) against finite differences.
 
 Scenes (the small scenes of tests/test_sensitivities.py and tests/test_path_following.py):
 
@@ -27,7 +27,7 @@ import pytest
 
 import ngtmc
 from ngtmc import sensitivities as S
-from ngtmc import sensitivities_coupled as SC
+from ngtmc.sensitivities import coupled as SC
 from ngtmc.studies import design_for_contact as D
 from scenes import notched_plate, tension_bar
 

@@ -1,4 +1,4 @@
-"""Energy splits (ngtmc.splits) against hand calculations, and their selection per Scene.
+"""Energy splits (ngtmc.model.splits) against hand calculations, and their selection per Scene.
 
 Hand states (plane strain, eps_33 = 0; K, G bulk and shear moduli, lambda = K - 2G/3,
 M = K + 4G/3): hydrostatic eps = diag(e, e), uniaxial strain eps = diag(e, 0), pure shear
@@ -12,8 +12,8 @@ import pytest
 from netgen.geom2d import unit_square
 
 import ngtmc
-from ngtmc import splits
-from ngtmc.materials import psi_bar, psi_plus
+from ngtmc.model import splits
+from ngtmc.model.materials import psi_bar, psi_plus
 from scenes import tension_bar
 
 K, G = 1234.5, 456.7

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 import ngtmc
-from ngtmc.stepping import AdaptiveStepControl, ControlState, Schedule
+from ngtmc.stepping.control import AdaptiveStepControl, ControlState, Schedule
 from scenes import tension_bar
 
 
@@ -120,7 +120,7 @@ def test_checkpointed_control_state_keeps_its_old_form():
 
 @pytest.mark.parametrize("scheme, scale", [("single-pass", 0.5), ("path-following", 1.0)])
 def test_path_following_doubles_the_scale_after_every_step(scheme, scale):
-    """ngtmc.path.N_S: under path following the scale halved by a cut-back doubles after the next
+    """ngtmc.stepping.path.N_S: under path following the scale halved by a cut-back doubles after the next
     successful step, whatever the control's n_s; the other schemes keep n_s (here 5)."""
     ctrl = AdaptiveStepControl(du_max=0.004, du_min=1e-6, n_s=5)
     sim = ngtmc.Simulation(tension_bar(), 0.02, ctrl, scheme=scheme)

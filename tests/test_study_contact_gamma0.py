@@ -23,7 +23,8 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from ngtmc.study import load_study, study_parameters
+from ngtmc.study import load_study
+from ngtmc.study import study_parameters
 from study_expected import expected_test
 
 S = load_study("contact_gamma0")

@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 
 import ngtmc
-from ngtmc.study import load_study, study_parameters
+from ngtmc.study import load_study
+from ngtmc.study import study_parameters
 from ngtmc.studies import step_control as sc
 from ngtmc.studies import three_point_bending as tpb
 

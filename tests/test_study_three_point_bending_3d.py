@@ -11,7 +11,9 @@ import pytest
 
 import ngtmc
 from ngtmc import sensitivities as S
-from ngtmc.study import StudyError, load_study, study_parameters
+from ngtmc.study import load_study
+from ngtmc.study import StudyError
+from ngtmc.study import study_parameters
 
 study = load_study("three_point_bending_3d")
 

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import ngtmc
-from ngtmc.study import StudyError, study_parameters
+from ngtmc.study import StudyError
+from ngtmc.study import study_parameters
 from ngtmc.studies import _tpb_elastic as elastic
 from ngtmc.studies import three_point_bending as tpb
 from tpb_runs import solve_quick

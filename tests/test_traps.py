@@ -190,7 +190,7 @@ def test_gmres_function_tolerance_is_absolute():
     (it is passed on as ``atol``; ``reltol`` is the relative one). A small right-hand side is then
     'solved' by the zero vector, silently: here a Poisson load of 1e-9 with tol = 1e-6 returns
     x = 0. A Newton correction of a nearly converged step is such a small right-hand side, so the
-    coupled solver uses ``GMResSolver(tol=relative)`` (:class:`ngtmc.coupled.CoupledNewton`,
+    coupled solver uses ``GMResSolver(tol=relative)`` (:class:`ngtmc.coupled.monolithic.CoupledNewton`,
     ``gmres_rtol``); measured 2026-11-25, ngsolve 6.2.2608."""
     from netgen.occ import unit_square
     from ngsolve.krylovspace import GMRes, GMResSolver

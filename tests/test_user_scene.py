@@ -1,7 +1,7 @@
 """A user's own scene gets the run folder and report of a named study; one progress printer.
 
 ``ngtmc.simulate(scene, schedule, control, out_dir=...)`` and ``ngtmc run path/to/my_study.py``
-go through the runner (:mod:`ngtmc.runner`) and its per-step plugins (:mod:`ngtmc.plugins`):
+go through the runner (:mod:`ngtmc.runner`) and its per-step plugins (:mod:`ngtmc.simulation.plugins`):
 the same files, the same metadata schema, the same report. Tiny scenes of tests/scenes.py (a few
 dozen triangles, about a second each).
 """
@@ -18,8 +18,10 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import ngtmc  # noqa: E402
-from ngtmc.plugins import Progress, force_unit  # noqa: E402
-from ngtmc.runfiles import HISTORY_UNITS, SCHEMA_VERSION  # noqa: E402
+from ngtmc.simulation.plugins import Progress  # noqa: E402
+from ngtmc.simulation.history import force_unit
+from ngtmc.study.run_files import SCHEMA_VERSION  # noqa: E402
+from ngtmc.simulation.history import HISTORY_UNITS
 from ngtmc.study import StudyError  # noqa: E402
 from scenes import tension_bar  # noqa: E402
 
@@ -218,7 +220,7 @@ def test_max_steps_ends_the_steps_with_a_step_failure():
 def test_report_output_plugin(tmp_path, capsys, monkeypatch):
     """The report is a plugin: rendered once, from the run folder, when the run ends; strict only
     for a completed run."""
-    from ngtmc.plugins import ReportOutput
+    from ngtmc.runner.outputs import ReportOutput
     import ngtmc.report
     calls = []
     monkeypatch.setattr(ngtmc.report, "render_report", lambda out: calls.append(out) or Path(out) / "report.html")

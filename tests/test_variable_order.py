@@ -82,7 +82,7 @@ def test_real_compile_falls_back_cleanly_without_a_compiler(monkeypatch):
     fail ('ngscxx: not found'): one RuntimeWarning, then the symbolic compilation, same residual."""
     import sys
     import sysconfig
-    from ngtmc import discretisation
+    from ngtmc.discrete import spaces as discretisation
     monkeypatch.setattr(discretisation, "_REAL_COMPILE_FAILED", [])
     monkeypatch.setattr(sysconfig, "get_path", lambda name: "/nonexistent")
     monkeypatch.setattr(sys, "executable", "/nonexistent/python")
@@ -100,6 +100,6 @@ def test_real_compile_falls_back_cleanly_without_a_compiler(monkeypatch):
 
 
 def test_auto_compile_generates_code_only_for_large_meshes():
-    from ngtmc.solver import AUTO_REAL_COMPILE_ELEMENTS
+    from ngtmc.discrete.solver import AUTO_REAL_COMPILE_ELEMENTS
     s = ngtmc.Solver(two_blocks())
     assert s.mesh.ne < AUTO_REAL_COMPILE_ELEMENTS and s._compile is True

@@ -2,7 +2,7 @@
 
 * element types x orders x 2D/3D: integration of each energy term against an exact value (by hand,
   or a rule of much higher order on the same discrete field) with the rules the solver uses
-  (:func:`ngtmc.discretisation.term_rules`, :data:`ngtmc.discretisation.RULE_EXACTNESS`);
+  (:func:`ngtmc.discrete.spaces.term_rules`, :data:`ngtmc.discrete.spaces.RULE_EXACTNESS`);
 * patch tests: a homogeneous deformation imposed on the whole boundary is reproduced exactly inside,
   with the energy density of the hand calculation, contact only (void + regulariser), crack only
   (a fracture region) and coupled;
@@ -24,9 +24,9 @@ from netgen.occ import Circle, Glue, MoveTo, OCCGeometry, Rectangle, X
 import pytest
 
 import ngtmc
-from ngtmc import contact_regularisation as creg
-from ngtmc.discretisation import RULE_EXACTNESS, term_rules
-from ngtmc.materials import deformation_gradient, psi_bar
+from ngtmc.model import regularisation as creg
+from ngtmc.discrete.spaces import RULE_EXACTNESS, term_rules
+from ngtmc.model.materials import deformation_gradient, psi_bar
 
 E, NU = 1000.0, 0.3
 K0, G0 = E / (3 * (1 - 2 * NU)), E / (2 * (1 + NU))
@@ -279,7 +279,7 @@ def test_every_accepted_state_meets_the_stated_tolerance_and_floors_are_counted(
     + atol of NewtonOptions, or floor_rtol where the step's ``floor_accepts`` says so; with
     ``floor_rtol=None`` no step may be accepted at a floor."""
     from scenes import two_blocks
-    from ngtmc.displacement_newton import DISPLACEMENT_RTOL
+    from ngtmc.discrete.newton import DISPLACEMENT_RTOL
     for newton in (ngtmc.NewtonOptions(), ngtmc.NewtonOptions(floor_rtol=None)):
         sim = ngtmc.Simulation(two_blocks(), 0.06, ngtmc.AdaptiveStepControl(du_max=0.01, du_min=1e-7, k_u=1e3),
                                newton=newton)

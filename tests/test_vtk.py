@@ -1,4 +1,4 @@
-"""VTK output (ngtmc.vtk) read back as a ParaView user would: with meshio, and with VTK's own reader
+"""VTK output (ngtmc.runner.vtk) read back as a ParaView user would: with meshio, and with VTK's own reader
 where the vtk package is installed. Tiny homogeneous scenes whose fields have hand values."""
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import pytest
 from scipy.optimize import brentq
 
 import ngtmc
-from ngtmc.solver import Solver
+from ngtmc.discrete.solver import Solver
 from ngtmc.study import Case
-from ngtmc.vtk import DISPLACEMENT, FIELDS, VtkWriter
+from ngtmc.runner.vtk import DISPLACEMENT, FIELDS, VtkWriter
 from scenes import bar_mesh, tension_bar
 
 E, NU = 1000.0, 0.3

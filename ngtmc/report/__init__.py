@@ -26,29 +26,29 @@ Public functions
 """
 from __future__ import annotations
 
-from .loading import (  # noqa: F401
+from ngtmc.report.loading import (  # noqa: F401
     HISTORY_COLUMNS, load_run, _load, _case_list, _param_value, _case_rows, _find_runs)
-from ..materials import (  # noqa: F401  (Eqs. 17 and 18 under the report's names)
+from ngtmc.model.materials import (  # noqa: F401  (Eqs. 17 and 18 under the report's names)
     gamma_interpolation as gamma_of_rho, gc_interpolation as gc_ratio_of_rho)
-from .numbers import (  # noqa: F401
+from ngtmc.report.numbers import (  # noqa: F401
     _finite, fmt, fmt_u, _pct, fmt_duration, fmt_date, _rs, _UNIT_PREFIX,
     unit_factor, _any_positive, run_features, overrides_text, physics_key, case_numbers, _targets_for,
     key_number_rows, reference_peaks, _published_peak, speed_error_rows, TIME_SPLIT_PARTS,
     time_split_rows, _run_speed_entries)
-from .plot_style import (  # noqa: F401
+from ngtmc.report.plot_style import (  # noqa: F401
     MAX_POINTS, CASE_COLORS, REF_COLORS, ALPHA_COLORSCALE, RHO_COLORSCALE, FONT, _case_style, _axis, _layout, decimate,
     _legend_rows, _legend_below, _log_axis, _line, _log_toggle)
-from .figures import (  # noqa: F401
+from ngtmc.report.figures import (  # noqa: F401
     _fig_force, _fig_step_size, _fig_wf_alpha, _fig_newton, _fig_energies, _fig_interpolation, _fig_speed_error)
-from .mesh_frames import (  # noqa: F401
+from ngtmc.report.mesh_frames import (  # noqa: F401
     MAX_FRAMES, MAX_VERTEX_FRAMES, MAX_EDGE_TRIANGLES, N_LEVELS, _nice_scale, deformation_scale, _frame_indices,
     mesh_payload, _same_mesh, _level_colors)
-from .page import (  # noqa: F401
+from ngtmc.report.page import (  # noqa: F401
     _env, _script_json, _json_default, _clean, _plotly_js, _status_banner, _parameter_rows, _mesh_rows,
     render_report)
-from .index import (  # noqa: F401
+from ngtmc.report.index import (  # noqa: F401
     render_index)
-from .command import (  # noqa: F401
+from ngtmc.report.command import (  # noqa: F401
     report_main)
 
 __all__ = ["load_run", "render_report", "render_index", "report_main",

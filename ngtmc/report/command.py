@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 from typing import Iterable
 
-from .loading import _find_runs
-from .page import render_report
-from .index import render_index
+from ngtmc.report.loading import _find_runs
+from ngtmc.report.page import render_report
+from ngtmc.report.index import render_index
 
 
 def report_main(argv: Iterable[str] | None = None) -> int:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .loading import _case_rows, _param_value
-from ..materials import gamma_interpolation, gc_interpolation
-from .numbers import _finite, _rs, fmt, unit_factor
-from .plot_style import (CASE_COLORS, REF_COLORS, _axis, _layout, _legend_below, _legend_rows, _line, _log_axis,
+from ngtmc.report.loading import _case_rows, _param_value
+from ngtmc.model.materials import gamma_interpolation, gc_interpolation
+from ngtmc.report.numbers import _finite, _rs, fmt, unit_factor
+from ngtmc.report.plot_style import (CASE_COLORS, REF_COLORS, _axis, _layout, _legend_below, _legend_rows, _line, _log_axis,
                          _log_toggle)
 
 

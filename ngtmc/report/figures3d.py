@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from .plot_style import ALPHA_COLORSCALE, _font, _title
-from .mesh_frames import MAX_FRAMES, _frame_indices, deformation_scale
-from .numbers import fmt
+from ngtmc.report.plot_style import ALPHA_COLORSCALE, _font, _title
+from ngtmc.report.mesh_frames import MAX_FRAMES, _frame_indices, deformation_scale
+from ngtmc.report.numbers import fmt
 
 
 #: Budget of numbers (coordinates, alpha and section values of every frame shown, the first

@@ -5,12 +5,12 @@ from __future__ import annotations
 import datetime as _dt
 from pathlib import Path
 
-from .loading import _case_list, _find_runs, _load
-from .numbers import (
+from ngtmc.report.loading import _case_list, _find_runs, _load
+from ngtmc.report.numbers import (
     _finite, _published_peak, case_numbers, fmt, fmt_date, fmt_duration, fmt_u, overrides_text,
     physics_key, speed_error_rows)
-from .figures import _fig_speed_error
-from .page import _clean, _env, _plotly_js, _script_json
+from ngtmc.report.figures import _fig_speed_error
+from ngtmc.report.page import _clean, _env, _plotly_js, _script_json
 
 
 def render_index(reports_dir) -> Path:

@@ -8,11 +8,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..runfiles import HISTORY_UNITS as _HISTORY_UNITS
+from ngtmc.simulation.history import HISTORY_UNITS as _HISTORY_UNITS
+from ngtmc.study.run_files import effective_status
 
 
 #: Columns of ``history.csv`` (docs/run-directory.md) with their units, from the one definition
-#: in :mod:`ngtmc.runfiles`; the force is in the run's ``force_unit``.
+#: in :mod:`ngtmc.study.run_files`; the force is in the run's ``force_unit``.
 HISTORY_COLUMNS: dict[str, str] = {"case": "-", **{k: "(force_unit)" if k == "force" else u
                                                    for k, u in _HISTORY_UNITS.items()}}
 
@@ -59,7 +60,6 @@ def _load(run_dir, with_snapshots: bool = True):
     meta.setdefault("study", run_dir.name)
     meta.setdefault("status", "unknown")
     # a "running" status whose process is gone is an interrupted (resumable) run
-    from ..runfiles import effective_status
     meta["status"], note = effective_status(meta)
     if note:
         meta["status_note"] = note

@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..runfiles import peak
-from .loading import _case_list, _case_rows, _param_value
+from ngtmc.simulation.history import peak
+from ngtmc.report.loading import _case_list, _case_rows, _param_value
 
 
 def _finite(x) -> bool:
@@ -355,7 +355,7 @@ def speed_error_rows(entries: list[dict], finest: dict | None = None) -> list[di
     return entries
 
 
-#: Parts of the time split shown in the report, in order (keys of ngtmc.solver.TIMING_KEYS).
+#: Parts of the time split shown in the report, in order (keys of ngtmc.discrete.solver.TIMING_KEYS).
 TIME_SPLIT_PARTS = ("assembly", "residual", "factorization", "solve", "line_search", "phase_field", "history", "record")
 
 

@@ -8,17 +8,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .loading import _case_list, load_run
-from .numbers import (
+from ngtmc.report.loading import _case_list, load_run
+from ngtmc.report.numbers import (
     _finite, _pct, _run_speed_entries, case_numbers, fmt, fmt_date, fmt_duration, fmt_u, key_number_rows,
     overrides_text, reference_peaks, run_features, time_split_rows)
-from .figures import (
+from ngtmc.report.figures import (
     _fig_energies, _fig_force, _fig_interpolation, _fig_newton, _fig_speed_error, _fig_step_size, _fig_wf_alpha,
     fig_study)
-from .plot_style import ALPHA_COLORSCALE, FONT, RHO_COLORSCALE, _case_style
-from .mesh_frames import (
+from ngtmc.report.plot_style import ALPHA_COLORSCALE, FONT, RHO_COLORSCALE, _case_style
+from ngtmc.report.mesh_frames import (
     MAX_EDGE_TRIANGLES, MAX_FRAMES, MAX_VERTEX_FRAMES, N_LEVELS, _level_colors, _same_mesh, mesh_payload)
-from .figures3d import MAX_VALUES_3D, is_3d, snapshot_figures_3d
+from ngtmc.report.figures3d import MAX_VALUES_3D, is_3d, snapshot_figures_3d
 
 
 def snapshot_group_label(name: str, snap: dict, cases: list[dict]) -> str:

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from .numbers import _rs
+from ngtmc.report.numbers import _rs
 
 
 #: Largest number of points drawn per history curve (longer curves are thinned, shape kept).

@@ -1,6 +1,6 @@
 """The case loop of a run: resume (what the checkpoints and the recorded files of a run folder
 allow to take over), validation of every case before anything is solved, and each case through
-:meth:`ngtmc.Simulation.steps` and the plugins of :mod:`ngtmc.plugins`, into its
+:meth:`ngtmc.Simulation.steps` and the plugins of :mod:`ngtmc.simulation.plugins`, into its
 :class:`ngtmc.runner.folder.RunFolder`.
 """
 from __future__ import annotations
@@ -11,11 +11,17 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ..plugins import CheckpointOutput, Progress, RowCallbacks, SnapshotOutput
-from ..scene import ResolutionWarning
-from ..snapshots import Snapshots
-from ..study import Case, StudyError
-from .folder import _CONTROL_SETTINGS, RunFolder, _mesh_info, _threads, case_results
+from ngtmc.simulation.plugins import Progress, RowCallbacks
+from ngtmc.runner.outputs import CheckpointOutput, SnapshotOutput
+from ngtmc.scene.warnings import ResolutionWarning
+from ngtmc.runner.snapshots import Snapshots
+from ngtmc.study import StudyError
+from ngtmc.study import Case
+from ngtmc.runner.folder import CONTROL_SETTINGS, RunFolder, _mesh_info, _threads, case_results
+from ngtmc.runner.rank_snapshots import GatheredSnapshots
+from ngtmc.scene.distributed import distribute, refuse_unsupported
+from ngtmc.simulation.loop import Simulation, StepFailure
+from ngtmc.stepping.control import AdaptiveStepControl, Schedule
 
 __all__ = ["_Run"]
 
@@ -126,8 +132,6 @@ class _Run(RunFolder):
         is created or any step solved; raise StudyError naming the case and the parameter.
         ``cases``: only these (default: all of the run)."""
         import inspect
-        from ..simulation import Simulation
-        from ..stepping import AdaptiveStepControl, Schedule
         allowed = set(inspect.signature(Simulation.__init__).parameters) - {"self", "scene", "schedule", "control"}
         for case in self.cases if cases is None else cases:
             if case.name in self.results or case.run is not None:
@@ -147,7 +151,6 @@ class _Run(RunFolder):
                     warnings.simplefilter("ignore", ResolutionWarning)
                     scene.check(getattr(adapt, "h_crack", None))
                 if self.comm is not None:  # what the distributed scene will refuse, refused before anything runs
-                    from ..distributed import refuse_unsupported
                     refuse_unsupported(scene, adapt)
             except (ValueError, TypeError, NotImplementedError) as e:
                 raise StudyError(f"study {self.mod.NAME!r}, case {case.name!r}: {e}") from e
@@ -158,7 +161,6 @@ class _Run(RunFolder):
         return (self.results.get(case.name) or {}).get("status") == "completed"
 
     def run_case(self, k: int, case: Case, resume: bool):
-        from ..simulation import Simulation, StepFailure
 
         ck = self.resume_from.pop(case.name, None)
         if self.completed(case):
@@ -189,7 +191,6 @@ class _Run(RunFolder):
         t_build = time.perf_counter()
         scene = serial = case.build_scene()
         if self.comm is not None:
-            from ..distributed import distribute
             scene = distribute(serial, self.comm, curve=serial.mesh.GetCurveOrder())
         sim = Simulation(scene, case.schedule, case.control, progress=False, **(case.options or {}))
         build_time = time.perf_counter() - t_build
@@ -206,7 +207,7 @@ class _Run(RunFolder):
                          ("regulariser", scene.regulariser is not None)):
             self.features[key] = bool(self.features.get(key, False) or has)
         # the control the run uses (path following bounds its displacement steps by its own du_max)
-        cm["control"] = {a: getattr(sim.control, a) for a in _CONTROL_SETTINGS if hasattr(sim.control, a)}
+        cm["control"] = {a: getattr(sim.control, a) for a in CONTROL_SETTINGS if hasattr(sim.control, a)}
         cm["schedule"] = [float(x) for x in sim.schedule.points]
         cm["options"] = {k_: v for k_, v in (case.options or {}).items() if isinstance(v, (int, float, str, bool))}
         self.case_meta[case.name] = cm
@@ -217,7 +218,6 @@ class _Run(RunFolder):
         if self.comm is None:
             snaps = Snapshots(case, sim, vtk_dir)
         else:  # the fields gathered on rank 0 in the serial mesh's numbering; each rank checkpoints its part
-            from ..rank_snapshots import GatheredSnapshots
             snaps = GatheredSnapshots(case, sim, vtk_dir, self.comm, serial)
         fingerprint = _rank_fingerprint(sim.solver) if self.comm is not None else None
         if ck is not None and fingerprint is not None:
@@ -258,7 +258,7 @@ class _Run(RunFolder):
             res["status"] = status
             # CPU time of all threads of this process (wall time inflates when the machine is shared)
             res["cpu_time_s"] = cm["cpu_time_s"] = time.process_time() - cpu0
-            # where the time went (s) since this process started the case (see ngtmc.solver.TIMING_KEYS)
+            # where the time went (s) since this process started the case (see ngtmc.discrete.solver.TIMING_KEYS)
             res["time_split_s"] = {k: float(v) for k, v in sim.solver.timings.items()}
             res["peak_memory_mb"] = peak_memory_mb()
             res["counters"] = sim.counters()

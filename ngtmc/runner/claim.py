@@ -14,8 +14,8 @@ import os
 from pathlib import Path
 import time
 
-from ..runfiles import process_alive, process_info
-from ..study import StudyError
+from ngtmc.study.run_files import process_alive, process_info
+from ngtmc.study import StudyError
 
 __all__ = ["CLAIM_FILE", "FolderInUse", "FolderClaim"]
 

@@ -1,5 +1,5 @@
 """The run folder of one run (the format of ``docs/run-directory.md``, schema in
-:mod:`ngtmc.runfiles`): what a run holds in memory (history rows, snapshots, results and metadata
+:mod:`ngtmc.study.run_files`): what a run holds in memory (history rows, snapshots, results and metadata
 of each case) and how it writes it, ``history.csv``, ``snapshots.npz``, ``metadata.json`` and the
 checkpoints of each case (``checkpoint/<case>.npz``, two generations). The case loop and resume
 logic that fills it: :mod:`ngtmc.runner.cases`.
@@ -19,22 +19,20 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ..plugins import force_unit
-from ..runfiles import (HISTORY_UNITS, CheckpointWarning, jsonable, parameters_hash, peak, physics_hash,
-                        run_description, write_atomic, write_json, write_npz)
-from ..regions import region_names
-from .checkpoints import CheckpointStore
-from ..snapshots import Snapshots
-from ..study import Case, StudyError
+from ngtmc.study.run_files import CheckpointWarning, jsonable, write_atomic, write_json, write_npz
+from ngtmc.study.parameters import parameters_hash, physics_hash, run_description
+from ngtmc.simulation.history import HISTORY_COLUMNS, HISTORY_UNITS, force_unit, peak
+from ngtmc.scene.regions import region_names
+from ngtmc.runner.checkpoints import CheckpointStore
+from ngtmc.runner.snapshots import Snapshots
+from ngtmc.study import StudyError
+from ngtmc.study import Case
 
-__all__ = ["HISTORY_COLUMNS", "RunFolder", "case_results"]
+__all__ = ["RunFolder", "case_results"]
 
-#: Columns of history.csv, in order: ``case``, then the Simulation's history columns
-#: (:data:`ngtmc.runfiles.HISTORY_UNITS`, their units).
-HISTORY_COLUMNS = ["case", *HISTORY_UNITS]
 
 #: settings of a step control recorded in the metadata (those the control has)
-_CONTROL_SETTINGS = ("du_max", "k_u", "du_min", "n_s", "newton_target", "growth", "dalpha_target", "du_first")
+CONTROL_SETTINGS = ("du_max", "k_u", "du_min", "n_s", "newton_target", "growth", "dalpha_target", "du_first")
 
 
 def _threads():
@@ -105,13 +103,13 @@ class RunFolder:
         names = [c.name for c in self.cases]
         if not names:   # a run of nothing is no completed run
             raise StudyError(f"study {mod.NAME!r}: cases() returned no case at resolution {resolution!r}; "
-                             "it must return a list of ngtmc.study.Case")
+                             "it must return a list of ngtmc.study.registry.Case")
         if len(set(names)) != len(names):
             raise StudyError(f"study {mod.NAME!r}: case names are not unique: {names}")
         bad = [n for n in names if "@" in n or "__" in n or not n]
         if bad:   # snapshots.npz keys are {case}__{field}, and {case}@{g}__{field} for a refined mesh
             raise StudyError(f"study {mod.NAME!r}: case names {bad} may contain neither '@' nor '__' (and not be empty)")
-        self.force_unit: str | None = None      # of the first scene built (ngtmc.plugins.force_unit)
+        self.force_unit: str | None = None      # of the first scene built (ngtmc.simulation.plugins.force_unit)
         self.thickness: float | None = None
         self.features: dict = {}                # what the scenes have (fracture, void, regulariser), for the report
         #: hash of the physical parameters alone (PARAMETERS, not the resolution's mesh and step sizes):

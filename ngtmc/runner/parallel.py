@@ -24,9 +24,9 @@ import uuid
 
 import pandas as pd
 
-from ..study import StudyError
-from .cases import _Run
-from .folder import case_results
+from ngtmc.study import StudyError
+from ngtmc.runner.cases import _Run
+from ngtmc.runner.folder import case_results
 
 __all__ = ["CaseFailure", "ParallelCases", "EXTRA", "require_dask"]
 

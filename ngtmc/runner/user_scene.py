@@ -11,12 +11,21 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..runfiles import read_metadata
-from ..regions import region_names
-from ..study import Case, StudyError, normalise_name
-from .folder import _CONTROL_SETTINGS
+from ngtmc.model.materials import check_number
+from ngtmc.runner.folder import CONTROL_SETTINGS
+from ngtmc.runner.study_run import execute
+from ngtmc.scene.distributed import check_supported
+from ngtmc.scene.regions import region_names
+from ngtmc.scene.scene import Scene
+from ngtmc.simulation.history import HISTORY_UNITS
+from ngtmc.simulation.loop import Simulation, SimulationResult
+from ngtmc.simulation.options import RUN_FOLDER_OPTIONS, check_options, simulation_keywords
+from ngtmc.stepping.control import AdaptiveStepControl, Schedule
+from ngtmc.study import StudyError, normalise_name
+from ngtmc.study import Case
+from ngtmc.study.run_files import read_metadata
 
-__all__ = ["scene_study", "run_scene"]
+__all__ = ["scene_study", "run_scene", "simulate"]
 
 
 def _value_text(v) -> str:
@@ -90,7 +99,7 @@ def _scene_parameters(scene, schedule, control, options: dict) -> dict:
         out["force_from"] = (str(scene.force_load.label), "-", "load behind the force column")
     out["schedule"] = ([float(x) for x in schedule.points], "mm", "load schedule (turning points)")
     if control is not None:
-        for a in _CONTROL_SETTINGS:
+        for a in CONTROL_SETTINGS:
             v = getattr(control, a, None)
             if v is not None:
                 out[f"control.{a}"] = (v, {"du_max": "mm", "du_min": "mm", "du_first": "mm", "k_u": "1/N"}.get(a, "-"),
@@ -118,12 +127,10 @@ def scene_study(scene, schedule, control=None, *, name: str | None = None, title
     ``name`` defaults to ``scene.name``; ``snapshot_loads`` (mm) default to 8 loads evenly along the
     schedule; ``references`` and ``targets`` in the metadata format; ``options``: keyword arguments
     of :class:`ngtmc.Simulation` (e.g. ``scheme``). ``section`` (3D): the plane ``(axis, mm)`` of
-    :class:`ngtmc.study.Case`. PARAMETERS describe the scene, schedule and control (materials,
+    :class:`ngtmc.study.registry.Case`. PARAMETERS describe the scene, schedule and control (materials,
     densities, mesh, ...), so a resume with another scene is refused.
     """
-    from ..stepping import Schedule
     if not isinstance(schedule, Schedule):
-        from ..materials import check_number
         check_number("schedule (a Schedule, or the final load)", schedule, "mm")
         schedule = Schedule.monotonic(float(schedule))
     if snapshot_loads is None:
@@ -159,8 +166,6 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
     (history.csv, metadata.json, snapshots.npz, vtk/, checkpoint/, report.html); see
     :func:`scene_study` and :func:`run_study`. Returns the :class:`ngtmc.SimulationResult`, its
     ``run_dir`` set. ``ngtmc.simulate(..., out_dir=...)`` calls this."""
-    from ..simulation import HISTORY_UNITS, SimulationResult
-    from . import execute        # the run of a named study (ngtmc.runner)
     if out_dir is None:
         raise StudyError("run_scene needs out_dir, the run folder to write")
     mod = scene_study(scene, schedule, control, name=name, title=title, summary=summary,
@@ -176,3 +181,30 @@ def run_scene(scene, schedule, control=None, out_dir: str | Path | None = None, 
     return SimulationResult(history, units, sim.solver if sim is not None else None,
                             float(run.results.get("main", {}).get("wall_time_s") or run.wall_time()),
                             run_dir=run.out)
+
+
+def simulate(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
+             out_dir=None, **options) -> SimulationResult:
+    """Run ``scene`` through ``schedule`` and return the :class:`SimulationResult`.
+
+    Without ``out_dir``: a shortcut for ``Simulation(scene, schedule, control, **options).run()``,
+    the history kept in memory.
+
+    With ``out_dir`` (a folder): the run folder of a named study is written there by the same
+    machinery (:func:`ngtmc.runner.run_scene`): ``history.csv``, ``metadata.json``,
+    ``snapshots.npz``, ``vtk/``, ``checkpoint/`` and ``report.html`` (``docs/run-directory.md``).
+    Further keywords then: ``resume``, ``report``, ``vtk``, ``progress``, ``threads``,
+    ``callbacks``, ``name``, ``title``, ``summary``, ``snapshot_loads`` (mm), ``references``,
+    ``targets``, ``section`` (3D: a plane ``(axis, mm)`` where the snapshots sample alpha); the rest go to :class:`Simulation`. The result's ``run_dir`` is the folder.
+    """
+    if out_dir is not None:
+        check_supported(scene, out_dir=out_dir)
+        return run_scene(scene, schedule, control, out_dir, **options)
+    callbacks = options.pop("callbacks", ())
+    folder_only = sorted(set(options) & RUN_FOLDER_OPTIONS)
+    if folder_only:
+        raise TypeError(f"ngtmc.simulate: {', '.join(folder_only)} {'needs' if len(folder_only) == 1 else 'need'} a "
+                        "run folder; pass out_dir='runs/my_scene' as well (or leave "
+                        f"{'it' if len(folder_only) == 1 else 'them'} out for a run kept in memory)")
+    check_options(options, simulation_keywords(Simulation), "ngtmc.simulate")
+    return Simulation(scene, schedule, control, **options).run(callbacks=callbacks)

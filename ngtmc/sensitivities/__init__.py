@@ -12,8 +12,8 @@ Schemes: ``record_path(..., scheme=...)`` with
 
 * ``"single-pass"`` (the default): this module, described below;
 * ``"monolithic"`` (load control) and ``"path-following"`` (dissipation control where the crack
-  grows): :mod:`ngtmc.sensitivities_coupled`, reached through the same functions (``record_path``
-  returns a :class:`~ngtmc.sensitivities_coupled.CoupledPath`; ``replay``, ``gradient``,
+  grows): :mod:`ngtmc.sensitivities.coupled`, reached through the same functions (``record_path``
+  returns a :class:`~ngtmc.sensitivities.coupled.CoupledPath`; ``replay``, ``gradient``,
   ``directional_fd``, ``taylor_test`` dispatch on it). There every step is the converged coupled
   solve (u_n, alpha_n) with the step's own history H_n(u_n) and the bounds alpha_{n-1} <= alpha_n
   <= 1 as active sets; held fixed are the step types and, per step, the load lambda_n of a
@@ -22,7 +22,7 @@ Schemes: ``record_path(..., scheme=...)`` with
 * ``"staggered"``: not differentiated (refused).
 
 What is differentiated for ``scheme="single-pass"`` (see ``docs/sensitivities.md`` for the
-derivation): the scheme that :class:`~ngtmc.simulation.Simulation` actually solved. At every recorded
+derivation): the scheme that :class:`~ngtmc.simulation.loop.Simulation` actually solved. At every recorded
 load step n, with the imposed displacement lambda_n held fixed,
 
 1. alpha_n = P_n(A(H_{n-1})^{-1} f(H_{n-1})), P_n the projection onto [alpha_{n-1}, 1];
@@ -32,7 +32,7 @@ load step n, with the imposed displacement lambda_n held fixed,
 3. H_n = max(H_{n-1}, Psi_plus(u_n)) at the history quadrature points.
 
 The energy of (2) and the Psi_plus of (3) are those of the scene's ``split`` and ``formulation``
-(:mod:`ngtmc.splits`): the adjoint follows every pair, since it differentiates the solver's own
+(:mod:`ngtmc.model.splits`): the adjoint follows every pair, since it differentiates the solver's own
 expressions symbolically (checked against finite differences for the default, for "vol-dev-small"
 hybrid, "vol-dev-log" hybrid and "spectral" anisotropic in ``tests/test_sensitivities.py``; the
 derivatives are one-sided where a principal strain, tr eps or ln J is exactly zero). Measured: the
@@ -67,25 +67,16 @@ Units: mm, N, MPa. Forces and energies are for the scene thickness in 2D.
 """
 from __future__ import annotations
 
-from .path import (  # noqa: F401 (the names of the former single module)
-    _MATERIAL_KEYS, CHANGED_MESH, refuse_changed_mesh, Path, _all_parameters, _snapshot_parameters,
-    _set_parameters, _default_region, _resolve, parameter_value, design_mask, _reset, _capture, _step,
-    _thin, record_path, replay, replay_inputs,
-)
-from .objectives import (  # noqa: F401 (the names of the former single module)
-    Seeds, Objective, _Combination, _step_index, ReactionAtStep, ComplianceAtStep, ExternalWork,
-    FinalFractureEnergy, UserObjective, ForceCurveObjective, evaluate, _integrate_rule, _cf_value,
-)
-from .adjoint import (  # noqa: F401 (the names of the former single module)
-    _FormSet, _Engine, _engine, _wrt_keys, _Accumulator, history_adjoint, gradient, differentiate,
-)
-from .checks import (  # noqa: F401 (the names of the former single module)
-    _perturbed, directional_fd, active_sets, active_set_changes, directional_derivative, taylor_test,
-)
+from ngtmc.sensitivities.adjoint import gradient
+from ngtmc.sensitivities.api import differentiate, record_path
+from ngtmc.sensitivities.checks import active_set_changes, active_sets, directional_derivative, directional_fd, taylor_test
+from ngtmc.sensitivities.objectives import (ComplianceAtStep, ExternalWork, FinalFractureEnergy, ForceCurveObjective,
+                                           Objective, ReactionAtStep, Seeds, UserObjective, evaluate)
+from ngtmc.sensitivities.path import Path, design_mask, parameter_value, replay
 
 __all__ = [
     "Path", "record_path", "replay", "gradient", "differentiate", "evaluate", "parameter_value", "design_mask",
     "Objective", "ReactionAtStep", "ExternalWork", "FinalFractureEnergy", "ComplianceAtStep",
     "UserObjective", "ForceCurveObjective", "directional_fd", "taylor_test",
+    "Seeds", "directional_derivative", "active_sets", "active_set_changes",
 ]
-__all__ += ["Seeds", "directional_derivative", "active_sets", "active_set_changes"]

@@ -12,13 +12,11 @@ from typing import Iterable
 import numpy as np
 import ngsolve as ngs
 
-from ..materials import deformation_gradient
-from ..discretisation import rules
-from ..scene import Scene
-from ..solver import NewtonOptions, Solver
-from ..stepping import AdaptiveStepControl, Schedule
-from .objectives import Objective, Seeds
-from .path import Path, _all_parameters, _resolve, record_path, refuse_changed_mesh
+from ngtmc.model.materials import deformation_gradient
+from ngtmc.discrete.spaces import rules
+from ngtmc.discrete.solver import Solver
+from ngtmc.sensitivities.objectives import Objective, Seeds
+from ngtmc.sensitivities.path import Path, _all_parameters, _resolve, refuse_changed_mesh
 
 
 class _FormSet:
@@ -208,11 +206,10 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
     The derivative is exact for the discrete scheme with the recorded load steps and active sets
     held fixed (see the module docstring). Only the solver's fields are changed; the solver is
     left in the final state of the path. A path of a monolithic scheme is differentiated by
-    :func:`ngtmc.sensitivities_coupled.coupled_gradient`."""
+    :func:`ngtmc.sensitivities.coupled.coupled_gradient`."""
     refuse_changed_mesh(path.solver)
     if getattr(path, "coupled", None) is not None:
-        from ..sensitivities_coupled import coupled_gradient
-        return coupled_gradient(path, objective, wrt)
+        return path.gradient(objective, wrt)          # CoupledPath.gradient
     t0 = time.perf_counter()
     wrt = tuple(wrt)
     s = path.solver
@@ -302,17 +299,3 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
                 add_scalar(eng.alpha_forms, -1.0)
     path.activate(N)
     return acc.result(value, t0, path.forward_time)
-
-
-def differentiate(scene: Scene, schedule: Schedule | float, objective: Objective,
-                  control: AdaptiveStepControl | None = None,
-                  wrt: Iterable[str] = ("rho", "E", "Gc", "l0", "gamma0"), **options) -> tuple[dict, Path]:
-    """One call: run ``scene`` through ``schedule`` (:func:`record_path`, ``options`` as there) and
-    return (``gradient(path, objective, wrt)``, path). Newton defaults to ``rtol=1e-12`` here, and
-    for the monolithic schemes the coupled solver's ``alpha_tol`` to 1e-12."""
-    options.setdefault("newton", NewtonOptions(rtol=1e-12))
-    if options.get("scheme") in ("monolithic", "path-following"):
-        options["coupled"] = {"alpha_tol": 1e-12, **(options.get("coupled") or {})}
-    path = record_path(scene, schedule, control, **options)
-    return gradient(path, objective, wrt), path
-

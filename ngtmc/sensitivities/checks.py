@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .objectives import Objective
-from .path import Path, parameter_value, replay
+from ngtmc.sensitivities.objectives import Objective
+from ngtmc.sensitivities.path import Path, parameter_value, replay
 
 
 def _perturbed(path: Path, direction: dict, eps: float) -> Path:

@@ -11,8 +11,8 @@ from typing import Callable
 import numpy as np
 import ngsolve as ngs
 
-from .. import fracture
-from .path import Path
+from ngtmc.model import fracture
+from ngtmc.sensitivities.path import Path
 
 
 @dataclass
@@ -51,7 +51,7 @@ class Objective:
     def load_seeds(self, path: Path) -> np.ndarray:
         """dJ/dlambda_n, n = 0..N (explicit dependence on the recorded loads; J-unit per mm). Needed
         only where the load is an unknown: the dissipation steps of a path-following path
-        (:mod:`ngtmc.sensitivities_coupled`)."""
+        (:mod:`ngtmc.sensitivities.coupled`)."""
         raise NotImplementedError(f"{type(self).__name__} gives no derivative with respect to the loads "
                                   f"(load_seeds), which the dissipation steps of a path-following path need")
 

@@ -13,12 +13,12 @@ from typing import Sequence
 import numpy as np
 import ngsolve as ngs
 
-from ..conditions import Traction
-from ..scene import Scene
-from ..schemes import alpha_u_passes
-from ..simulation import Simulation
-from ..solver import NewtonOptions, Solver
-from ..stepping import AdaptiveStepControl, Schedule
+from ngtmc.scene.conditions import Traction
+from ngtmc.scene.scene import Scene
+from ngtmc.stepping.schemes import alpha_u_passes
+from ngtmc.simulation.loop import Simulation
+from ngtmc.discrete.solver import NewtonOptions, Solver
+from ngtmc.stepping.control import AdaptiveStepControl, Schedule
 
 _MATERIAL_KEYS = ("E", "nu", "Gc", "l0")
 
@@ -210,7 +210,7 @@ def _capture(solver: Solver) -> dict:
 
 def _step(s: Solver, load: float, n: int):
     """One step of the single-pass scheme at a fixed load, by the runs' own
-    :func:`ngtmc.schemes.alpha_u_passes`, and its history committed."""
+    :func:`ngtmc.stepping.schemes.alpha_u_passes`, and its history committed."""
     ok, info = alpha_u_passes(s, load)
     if not ok:
         raise RuntimeError(f"replay: step {n} (load {load:.6g} mm) failed: {info['message']}")
@@ -224,19 +224,9 @@ def _thin(states: list, k: int | None):
         states[m] = None
 
 
-def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
-                newton: NewtonOptions | None = None, checkpoint_every: int | None = None, **options) -> Path:
-    """Run ``scene`` through ``schedule`` (adaptive steps as in :class:`~ngtmc.simulation.Simulation`)
-    and store every accepted state for :func:`gradient`.
-
-    ``options`` go to :class:`~ngtmc.simulation.Simulation`; ``scheme="single-pass"`` (the paper's
-    scheme, the default), ``"monolithic"`` and ``"path-following"`` can be differentiated (the two
-    monolithic ones by :mod:`ngtmc.sensitivities_coupled`, which returns a
-    :class:`~ngtmc.sensitivities_coupled.CoupledPath`; no checkpointing there). For gradients that
-    agree with finite differences to 1e-4, converge Newton tightly, e.g.
-    ``newton=NewtonOptions(rtol=1e-12)``, and for the monolithic schemes also the phase field,
-    ``coupled={"alpha_tol": 1e-12}``. ``checkpoint_every``: store only every k-th state (see
-    :class:`Path`). Returns a :class:`Path`."""
+def check_recordable(scene: Scene, checkpoint_every: int | None, options: dict) -> str:
+    """The scheme of a run that :func:`ngtmc.sensitivities.api.record_path` can record, or a
+    ValueError that says why the run cannot be differentiated."""
     if checkpoint_every is not None and int(checkpoint_every) < 1:
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be None or >= 1")
     if options.get("adapt") is not None:
@@ -249,10 +239,13 @@ def record_path(scene: Scene, schedule: Schedule | float, control: AdaptiveStepC
     if tractions:
         raise ValueError(f"record_path: the adjoint does not handle Traction loads (force control) so far: "
                          f"{tractions}; use displacement loads (DisplacementLoad, DisplacementField)")
-    if scheme != "single-pass":
-        from ..sensitivities_coupled import record_coupled_path
-        return record_coupled_path(scene, schedule, control, newton=newton, checkpoint_every=checkpoint_every,
-                                   **options)
+    return scheme
+
+
+def record_single_pass(scene: Scene, schedule: Schedule | float, control: AdaptiveStepControl | None = None,
+                       newton: NewtonOptions | None = None, checkpoint_every: int | None = None,
+                       **options) -> Path:
+    """The recording of :func:`ngtmc.sensitivities.api.record_path` for the single-pass scheme."""
     t0 = time.perf_counter()
     sim = Simulation(scene, schedule, control, newton=newton, **options)
     s = sim.solver
@@ -295,12 +288,11 @@ def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = 
 
     Uses the solver of ``path`` (its fields are overwritten). Raises RuntimeError if Newton fails at a
     step. Returns a new :class:`Path` (sharing the solver). A path of a monolithic scheme is replayed
-    by :func:`ngtmc.sensitivities_coupled.replay_coupled` (same step types, loads and dissipation
+    by :func:`ngtmc.sensitivities.coupled.replay_coupled` (same step types, loads and dissipation
     targets)."""
     refuse_changed_mesh(path.solver)
     if getattr(path, "coupled", None) is not None:
-        from ..sensitivities_coupled import replay_coupled
-        return replay_coupled(path, rho, parameters)
+        return path.replay(rho, parameters)          # CoupledPath.replay
     s = path.solver
     t0 = time.perf_counter()
     new_rho, pars = replay_inputs(path, rho, parameters)

@@ -1,0 +1,14 @@
+"""Adaptive mesh refinement during a run: the settings (:class:`Adaptivity`, :mod:`ngtmc.adapt.settings`),
+which elements to refine (:func:`mark`, :mod:`ngtmc.adapt.marking`), the crack corridor
+(:mod:`ngtmc.adapt.corridor`), newest-vertex bisection with the transfer of the state
+(:func:`refine`, :mod:`ngtmc.adapt.bisection`), remeshing (:mod:`ngtmc.adapt.remesh`), the state
+carried across non-nested meshes (:mod:`ngtmc.adapt.carried_state`) and the record of a refinement
+(:class:`RefinementRecord`). docs/adaptivity.md explains when each pays. Units: mm."""
+from ngtmc.adapt.bisection import refine, replay, transfer_history
+from ngtmc.adapt.marking import mark, targets
+from ngtmc.adapt.record import RefinementRecord
+from ngtmc.adapt.settings import CORRIDOR_L0, HISTORY_TRANSFERS, Adaptivity, check_solver, private_scene
+from ngtmc.scene.regions import centroids, coordinates
+
+__all__ = ["Adaptivity", "CORRIDOR_L0", "HISTORY_TRANSFERS", "mark", "targets", "refine", "replay", "transfer_history",
+           "RefinementRecord", "private_scene", "check_solver", "centroids", "coordinates"]

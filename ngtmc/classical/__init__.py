@@ -1,0 +1,2 @@
+"""Classical contact, for comparison with third-medium contact: a penalty contact between named
+boundaries on one displacement Newton (penalty_contact)."""

@@ -1,0 +1,45 @@
+"""The tuned settings of the coupled Newton (:mod:`ngtmc.coupled.monolithic`, :mod:`ngtmc.coupled.iteration`),
+each with the measurement it rests on."""
+import os
+
+__all__ = ["DEBUG", "STALL_WINDOW", "STALL_FACTOR", "LEVENBERG_SHIFTS", "WEAK_STEP", "WEAK_STOP", "COUPLED_RTOL"]
+
+#: print the merits and steps of each iteration (environment variable NGTMC_DEBUG_COUPLED set)
+DEBUG = bool(os.environ.get("NGTMC_DEBUG_COUPLED"))
+
+
+
+#: A solve stops as stalled when its merit function fell less than STALL_FACTOR over the last
+#: STALL_WINDOW iterations (checked from iteration STALL_WINDOW + 3 on): a Newton iteration that
+#: converges falls far faster, one that creeps along the line search does not reach the tolerance.
+STALL_WINDOW = 3
+STALL_FACTOR = 0.25
+
+#: FLOOR_RTOL (the residual floor at which a solve is accepted) is :data:`ngtmc.discrete.newton.FLOOR_RTOL`.
+
+#: Levenberg shifts mu tried in turn when the line search along the Newton direction fails: the
+#: free diagonal of the tangent is scaled by (1 + mu), which shortens the step in near-singular
+#: modes most (the squeezed-void vertex of FLOOR_RTOL).
+LEVENBERG_SHIFTS = (1e-4, 1e-2, 1.0)
+
+#: A Newton step accepted at a step length below WEAK_STEP is compared with Levenberg steps.
+WEAK_STEP = 1.0 / 16
+
+#: Default of ``CoupledNewton(weak_stop=...)``: an iteration that kept a weak Newton step (below
+#: WEAK_STEP) because no Levenberg step did better is treated as a stall (a displacement relaxation
+#: once, else acceptance at the residual floor, else the attempt fails and the caller cuts back).
+#: Without it, the paper L-panel's crack run spent most of a failed attempt there: from iteration
+#: 11 on, steps of 1/128-1/512 that lowered the merit by 1 % each, every one after a failed line
+#: search and three failed Levenberg factorizations, until the iteration limit (15). With it, two
+#: such steps took 76 and 74 s instead of 100 and 107 s (the same states); the quick L-panel's
+#: monotonic case 121 steps and 610 iterations instead of 129 and 654 (docs/performance.md).
+WEAK_STOP = True
+
+#: Relative residual of the coupled Newton where ``NewtonOptions.rtol`` is None (the default), and
+#: its complementarity tolerance where ``alpha_tol`` is None. The coupled Newton converges
+#: quadratically near a solution (the merit falls 1e-2, 1e-6, 1e-11, 1e-23), so 1e-6 instead of the
+#: displacement Newton's 1e-8 saves its last iteration in most steps. Measured on the quick
+#: three-point bending, path following, side by side with 1e-8 for both: the same 78 steps, 459
+#: instead of 515 Newton iterations, every recorded force the same to 7e-5 N/mm (2e-6 of the peak),
+#: the peak to 1e-8 N/mm (docs/performance.md). The adjoint's recordings pass 1e-12.
+COUPLED_RTOL = 1e-6

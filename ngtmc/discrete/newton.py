@@ -1,0 +1,385 @@
+"""The displacement Newton solver of :class:`ngtmc.discrete.solver.Solver`: Newton for u at an imposed load
+with alpha fixed (step 2 of the paper's scheme), with an energy line search, a guard against
+J <= 0, the Dirichlet increment carried by the Newton increment, and a shifted (Levenberg)
+tangent where the tangent is indefinite (a squeezed void).
+
+:class:`DisplacementNewton` is a base of :class:`ngtmc.discrete.solver.Solver`, on whose fields, forms and
+boundary conditions it works. The coupled Newton on (u, alpha) of the monolithic schemes is
+:mod:`ngtmc.coupled.monolithic`.
+
+Units: mm, N, MPa (residuals in N, for the scene thickness in 2D).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+import time
+
+import numpy as np
+import ngsolve as ngs
+
+__all__ = ["DisplacementNewton", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
+           "meets", "lifted_direction"]
+
+#: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
+DISPLACEMENT_RTOL = 1e-8
+
+#: Relative residual at which an iterate is accepted when the Newton direction no longer reduces
+#: the residual (line search failed or the iteration stalled), instead of the solver's rtol
+#: (1e-8): the default of ``NewtonOptions.floor_rtol`` (None refuses such iterates: the attempt
+#: fails and the step is cut back). Relative to :meth:`DisplacementNewton.equilibrium_scale`, the
+#: reaction of the iterate itself, never a residual of the step, so that a large step cannot loosen it.
+#: Why a floor at all: deep in the crack run of the paper three-point bending the correction is
+#: dominated by a near-singular mode, the horizontal motion of a vertex of the void layer squeezed
+#: under the indenter (the Hessian regulariser acts on the quadratic part of the order-2 field
+#: only, so vertex motion is not penalised): a correction of 1.3e-3 mm for a residual of 5.6e-7 N,
+#: and the residual along it is quadratic already at 1e-4 of the step, so no step length reduces
+#: it; the floors met there were 2e-8 to 1.4e-6 of the reaction, hence 1e-5. On the paper L-panel,
+#: 80 mm into the crack run, the u solve crept from 3.9e-5 N to 3.1e-5 N in 20 iterations against
+#: a tolerance of 1.9e-5 N. Every acceptance is counted per step in the history column
+#: ``floor_accepts`` and shown by the report.
+FLOOR_RTOL = 1e-5
+
+
+@dataclass
+class NewtonOptions:
+    """Options of the displacement Newton solver.
+
+    max_iterations: iterations before the attempt counts as failed (the step is then halved);
+    rtol: residual norm relative to the reaction-force scale (None: each Newton solver's own
+    default, DISPLACEMENT_RTOL for the displacement Newton and ``ngtmc.coupled.settings.COUPLED_RTOL`` for
+    the coupled Newton of the monolithic schemes); atol: absolute residual norm, N
+    (None: 1e-12 E_max L^(d-1), L the diagonal of the mesh's bounding box); armijo: sufficient
+    decrease constant; max_line_search: halvings of the step length before giving up;
+    linear_solver: "sparsecholesky" (symmetric tangents, fastest) or "umfpack";
+    floor_rtol: where the residual stops falling (the Newton direction no longer reduces it), the
+    iterate is accepted if its residual is below floor_rtol times the reaction of that iterate
+    (FLOOR_RTOL, 1e-5, the default; a round-off floor measured on the paper's studies) instead of
+    rtol; None refuses such iterates (the attempt fails and the step is cut back). Each
+    acceptance is counted in the history column ``floor_accepts`` of its step. Both Newton
+    solvers (displacement and coupled) use it.
+
+    The tolerance an accepted state meets: residual norm on the free dofs (N) <= rtol x
+    (the iterate's reaction norm, or the applied tractions' where larger:
+    :meth:`DisplacementNewton.equilibrium_scale`) + atol, with floor_rtol in place of rtol in the steps whose
+    ``floor_accepts`` is not 0. The history column ``residual`` records it for every step.
+    """
+
+    max_iterations: int = 25
+    rtol: float | None = None
+    atol: float | None = None
+    armijo: float = 1e-4
+    max_line_search: int = 12
+    linear_solver: str = "sparsecholesky"
+    floor_rtol: float | None = FLOOR_RTOL
+
+    def __post_init__(self):
+        if self.linear_solver not in ("sparsecholesky", "umfpack", "pardiso"):
+            raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
+        if int(self.max_iterations) < 1:
+            raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
+        for name in ("rtol", "floor_rtol"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v < 1)):
+                raise ValueError(f"NewtonOptions {name} = {v!r} must be a number in (0, 1) or None")
+        if self.atol is not None and (isinstance(self.atol, bool) or not isinstance(self.atol, (int, float))
+                                      or not self.atol >= 0):
+            raise ValueError(f"NewtonOptions atol = {self.atol!r} must be a number >= 0 (N) or None")
+
+
+@dataclass
+class NewtonResult:
+    """Outcome of one displacement solve."""
+
+    converged: bool
+    iterations: int
+    residual: float
+    solve_time: float
+    assembly_time: float
+    shifted: int = 0
+    message: str = ""
+
+
+def residual_split(r, u, target: np.ndarray, free: np.ndarray, dirichlet: np.ndarray, load: float, ranks=None):
+    """Where a Newton iteration at the imposed displacement ``load`` (mm) stands, from the residual
+    ``r`` (N) at ``u`` (NGSolve vectors) and the Dirichlet values ``target`` (mm, a dof array).
+
+    Returns (rem, lifted, res, reac): the boundary values still to impose (dof array, mm, zero on
+    the free dofs), whether any remain (the boundary values are then being lifted), the norm of
+    the residual on the free dofs and on the Dirichlet dofs (N). ``ranks``: the reductions of a
+    distributed mesh (:class:`ngtmc.scene.distributed.Ranks`; None for a serial one)."""
+    rem = np.where(dirichlet, target - u.FV().NumPy(), 0.0)
+    lifted = bool(np.any(np.abs(rem) > 1e-15 * max(1.0, abs(load))))
+    if ranks is None:
+        rN = r.FV().NumPy()
+        return rem, lifted, float(np.linalg.norm(rN[free])), float(np.linalg.norm(rN[dirichlet]))
+    return rem, ranks.any(lifted), ranks.masked_norm(r, free), ranks.masked_norm(r, dirichlet)
+
+
+def meets(res: float, scale: float, rtol: float, atol: float) -> bool:
+    """True where the residual norm ``res`` (N) meets ``rtol`` x ``scale`` + ``atol``. The scale is
+    the iterate's own: the norm of its reaction on the dofs the displacement loads move, or of the
+    applied tractions where that is larger (:meth:`DisplacementNewton.equilibrium_scale`; the
+    coupled Newton and the classical-contact solver take the same norm of their residual), never
+    a residual of the step, which grows with the step (a rigid rotation by 90 degrees in one step
+    was accepted with a force of 1.2e-7 N and a body 4e-7 mm off the rotation). The one owner of
+    the test: the three Newton solvers use it."""
+    return res <= rtol * scale + atol
+
+
+def lifted_direction(mat, inv, r, rem: np.ndarray, dirichlet: np.ndarray, w, tmp, du):
+    """The Newton increment ``du`` that carries the remaining boundary values: ``rem`` on the
+    Dirichlet dofs, and on the free dofs -(K^-1 (r + K w)) with w = rem, so that the boundary
+    values are never written into u directly (which would invert boundary elements). ``mat``: the
+    tangent K; ``inv``: its inverse on the free dofs; ``w``, ``tmp``: work vectors."""
+    w.FV().NumPy()[:] = rem
+    tmp.data = r + mat * w
+    du.data = inv * tmp
+    duN = du.FV().NumPy()
+    duN[:] = np.where(dirichlet, rem, -duN)
+
+
+#: print the residuals of each Newton iteration (a debugging switch: ngtmc.discrete.newton._DEBUG = True)
+_DEBUG = False
+
+#: Round-off of the stored energy against the Newton slope. The energy sums densities of the size
+#: of E_max over the volume, so its evaluation error does not shrink with the strains: on the quick
+#: L-panel at 0.1-0.5 mm of the approach (2026-12-03) the energy moved by +-1.6e-8 N mm along a
+#: Newton step whose predicted decrease was 1.9e-10 N mm, while E0 was 7.5e-4 N mm (so the test
+#: |slope| < 1e-8 |E0| did not see it). The Armijo test then rejected full steps at random, half
+#: steps followed (the residual halved exactly, one more iteration), and where every length failed
+#: the Levenberg shift was compiled and used. Where the Armijo test fails, the line search measures
+#: the round-off once by the second difference E(u0 + e du) + E(u0 - e du) - 2 E0 with
+#: e = NOISE_STEP (exactly e^2 |slope| for a quadratic energy, 1e-4 |slope|); where it exceeds
+#: NOISE_FRACTION |slope|, the energy cannot resolve the step and the residual norm decides, as
+#: near convergence.
+NOISE_STEP = 1e-2
+NOISE_FRACTION = 1e-2
+
+
+class DisplacementNewton:
+    """Newton for the displacement at a fixed phase field (a base of :class:`ngtmc.discrete.solver.Solver`)."""
+
+    def _inverse(self, kind: str) -> str:
+        """The sparse direct solver to pass as ``inverse=``: ``kind``, or on a mesh distributed over
+        MPI ranks NGSolve's "masterinverse" (the matrix gathered and factorized on rank 0)."""
+        return "masterinverse" if self.ranks.parallel else kind
+
+    def equilibrium_scale(self, r, load: float) -> float:
+        """The force scale (N) of :func:`meets` for this solver's iterate, whose residual is ``r``
+        (an NGSolve vector), at the load ``load`` (mm): the norm of the reactions on the dofs that
+        the displacement loads move, or of the tractions applied at ``load`` (force control) where
+        that is larger. The supports' reactions are left out: a plane-strain slab's held u_z carry
+        reactions that its 2D twin has no dofs for, and the two would converge differently."""
+        scale = self.ranks.masked_norm(r, self._moved_np)
+        if self._tractions:
+            scale = max(scale, abs(load) * self.ranks.masked_norm(self._f_ext, self._free_np))
+        return scale
+
+    @property
+    def _ranks_or_none(self):
+        return self.ranks if self.ranks.parallel else None
+
+    def _factorize(self, a):
+        if a is self.a_u:
+            if self._inv is None or self.ranks.parallel:  # NGSolve's masterinverse has no Update
+                self._inv = a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
+            else:
+                self._inv.Update()
+            return self._inv
+        return a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
+
+    def _energy(self, vec) -> float:
+        try:
+            e = self.a_u.Energy(vec)
+        except Exception:  # pragma: no cover - NGSolve raises on some invalid states
+            e = math.nan
+        # a distributed mesh: each rank's part (the form is a plain BilinearForm there), summed
+        return self.ranks.sum(e)
+
+    def _energy_noise(self, u0, du, E0: float) -> float:
+        """Round-off of the stored energy at ``u0`` along ``du``, N mm: |E(u0 + e du) + E(u0 - e du)
+        - 2 E0| with e = NOISE_STEP (see NOISE_FRACTION); inf where either energy is not finite.
+        Leaves ``self.u`` at u0 - e du."""
+        u = self.u.vec
+        total = -2.0 * E0
+        for e in (NOISE_STEP, -NOISE_STEP):
+            u.data = u0 + e * du
+            total += self._energy(u)
+        return abs(total) if math.isfinite(total) else math.inf
+
+    def _shift_form(self):
+        if self._a_shift is None:
+            self._mu = ngs.Parameter(0.0)
+            self._u_anchor = ngs.GridFunction(self.fes_u)
+            uT = self.fes_u.TrialFunction()
+            extra = 0.5 * self._mu * ngs.InnerProduct(uT - self._u_anchor, uT - self._u_anchor) * ngs.dx
+            self._a_shift = self._energy_form(uT, extra=extra)
+        return self._a_shift
+
+    def solve_displacement(self, load: float) -> NewtonResult:
+        """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed.
+
+        Converged where the residual on the free dofs meets rtol (``displacement_rtol``) times
+        the iterate's own force scale (:meth:`equilibrium_scale`: its reaction, or the applied
+        tractions) plus atol (:func:`meets`); no residual of the step (a first iterate's, a predictor's) enters
+        the tolerance, so that a large step cannot loosen it.
+
+        The Dirichlet increment is carried by the Newton increment (never written into u
+        directly, which would invert boundary elements). Steps are accepted only if the energy
+        is finite (which fails as soon as J <= 0 at one quadrature point); once the boundary
+        values are reached, steps must also decrease the energy (Armijo), or, where the energy's
+        round-off hides the decrease (near convergence, NOISE_FRACTION), the residual norm. If the tangent is not
+        a descent direction (indefinite tangent in a squeezed void), it is shifted by mu M with M
+        the mass matrix, mu raised by tenfold until the direction descends. Where the residual
+        stops falling (by less than half in an iteration, also the last one) or the line search
+        fails, the iterate is accepted if its residual is below ``floor_rtol``
+        (``NewtonOptions.floor_rtol``; None: never) of the same scale (counted in
+        ``floor_accepts``). On failure u is left at the last iterate; the caller restores the
+        state."""
+        opt = self.newton
+        rtol = self.displacement_rtol
+        u = self.u.vec
+        r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
+        self._r_valid = False
+        target = self.dirichlet_target(load)
+        self._lam_ext = load
+        solve_time = 0.0
+        assembly_time = 0.0
+        shifted = 0
+        res = math.inf
+        reac = 0.0
+        res_prev = math.inf
+        tm = self.timings
+        floor = self.floor_rtol
+        lifted = True
+
+        def at_floor(it):
+            """The residual no longer falls: the iterate accepted if it is below the floor, else None."""
+            if not floor or lifted or not meets(res, self.equilibrium_scale(r, load), floor, opt.atol):
+                return None
+            self.floor_accepts += 1
+            self.load = load
+            self._r_valid = False
+            return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
+
+        def settled(it):
+            """After the residual of the iterate of ``it`` iterations: the result if it converged,
+            or if the residual fell by less than half since the last one and sits at the floor;
+            else None."""
+            nonlocal res_prev
+            if lifted:
+                return None
+            if meets(res, self.equilibrium_scale(r, load), rtol, opt.atol):
+                self.load = load
+                self._r_valid = True
+                return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
+            done = at_floor(it) if res > 0.5 * res_prev else None
+            res_prev = res
+            return done
+
+        for it in range(1, opt.max_iterations + 1):
+            t0 = time.perf_counter()
+            self.a_u.Apply(u, r)
+            tm["residual"] += time.perf_counter() - t0
+            rem, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
+            if not np.isfinite(res):
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
+            if _DEBUG:
+                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} tol {rtol * self.equilibrium_scale(r, load) + opt.atol:.3e}")
+            done = settled(it - 1)
+            if done is not None:
+                return done
+            t0 = time.perf_counter()
+            self.a_u.AssembleLinearization(u)
+            assembly_time += time.perf_counter() - t0
+            tm["assembly"] += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            inv = self._factorize(self.a_u)
+            t1 = time.perf_counter()
+            lifted_direction(self.a_u.mat, inv, r, rem, self._dir_np, w, tmp, du)
+            t2 = time.perf_counter()
+            solve_time += t2 - t0
+            tm["factorization"] += t1 - t0
+            tm["solve"] += t2 - t1
+            t_ls = time.perf_counter()
+            E0 = math.nan if lifted else self._energy(u)  # lifted steps only need a finite trial energy
+            if not lifted and not math.isfinite(E0):
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
+            slope = self.ranks.dot(r, du)
+            u0.data = u
+
+            def line_search(slope):
+                """Backtracking on the step length; returns True if a step was accepted.
+
+                Energy (Armijo) while the energy can resolve the predicted decrease; near
+                convergence |slope| falls below the energy's round-off and the test switches to a
+                decrease of the residual norm. Guard: finite energy (J > 0 at the energy's
+                quadrature points) and J > 0 at the history points too (Psi_plus there feeds the
+                history; NaN would poison it)."""
+                near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
+                noise_known = near_converged
+                s = 1.0
+                for _ in range(opt.max_line_search):
+                    u.data = u0 + s * du
+                    E = self._energy(u)
+                    if math.isfinite(E) and self.min_J() > 0.0:
+                        if lifted or E <= E0 + opt.armijo * s * slope:
+                            return True
+                        if not noise_known:
+                            noise_known = True
+                            near_converged = self._energy_noise(u0, du, E0) > NOISE_FRACTION * abs(slope)
+                            self.energy_noise_switches += near_converged
+                            u.data = u0 + s * du
+                        if near_converged:
+                            self.a_u.Apply(u, tmp)
+                            if self.ranks.masked_norm(tmp, self._free_np) <= (1 - 1e-4 * s) * res:
+                                return True
+                    s *= 0.5
+                u.data = u0
+                return False
+
+            accepted = (lifted or slope < 0.0) and line_search(slope)
+            tm["line_search"] += time.perf_counter() - t_ls
+            if not accepted:
+                # the Newton direction ascends (indefinite tangent in a squeezed void), the energy
+                # does not decrease along it, or no fraction of it keeps J > 0 (near-singular
+                # tangent of broken elements after a large change of alpha): shift the tangent by
+                # mu M (Levenberg), mu raised tenfold each time
+                a_s = self._shift_form()
+                self._u_anchor.vec.data = u
+                mu = 1e-4 * self.E_max / self.ranks.min(self.h) ** 2
+                for _ in range(6):
+                    shifted += 1
+                    self._mu.Set(mu)
+                    t0 = time.perf_counter()
+                    a_s.AssembleLinearization(u)
+                    assembly_time += time.perf_counter() - t0
+                    tm["assembly"] += time.perf_counter() - t0
+                    t0 = time.perf_counter()
+                    inv_s = self._factorize(a_s)
+                    tm["factorization"] += time.perf_counter() - t0
+                    lifted_direction(a_s.mat, inv_s, r, rem, self._dir_np, w, tmp, du)
+                    solve_time += time.perf_counter() - t0
+                    slope = self.ranks.dot(r, du)
+                    t_ls = time.perf_counter()
+                    ok = (lifted or slope < 0.0) and line_search(slope)
+                    tm["line_search"] += time.perf_counter() - t_ls
+                    if ok:
+                        accepted = True
+                        break
+                    mu *= 10.0
+            if not accepted:
+                done = at_floor(it - 1)
+                if done is not None:
+                    return done
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted,
+                                    "line search failed" if not lifted else "no admissible step towards the boundary values")
+        # one last residual check after the final update
+        self.a_u.Apply(u, r)
+        _, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
+        done = settled(opt.max_iterations)
+        if done is not None:
+            return done
+        return NewtonResult(False, opt.max_iterations, res, solve_time, assembly_time, shifted,
+                            f"no convergence in {opt.max_iterations} iterations (residual {res:.3e} N)")

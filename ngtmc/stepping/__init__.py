@@ -1,0 +1,2 @@
+"""How a load path is walked: adaptive step control (control), the step schemes (schemes), and path
+following with its predictor, step sizing and refinement."""
