@@ -24,7 +24,7 @@ import numpy as np
 import ngsolve as ngs
 
 import ngtmc
-from ngtmc.coupled.linear import LINEAR_SOLVERS
+from ngtmc.coupled import LINEAR_SOLVERS
 from ngtmc.study import load_study
 from ngtmc.study import simulation_options, study_parameters
 

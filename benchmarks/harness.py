@@ -22,7 +22,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from ngtmc.simulation.history import peak, peak_index
+from ngtmc.simulation import peak, peak_index
 
 __all__ = ["parse_value", "parse_assignments", "merge_options", "pseudo_time", "downsample", "summarise",
            "compare", "timing_split", "table_rows", "format_table", "jsonable", "run_variant", "TABLE_COLUMNS"]
@@ -205,7 +205,7 @@ def format_table(records, markdown: bool = False) -> str:
 def jsonable(x):
     """``x`` in plain JSON types by the run folders' conversion (numpy values, NaN -> None), with
     dataclasses (e.g. NewtonOptions) as dicts naming their type and other objects as their repr."""
-    from ngtmc.study.run_files import jsonable as _jsonable
+    from ngtmc.study import jsonable as _jsonable
     return _jsonable(x, other=_json_other)
 
 

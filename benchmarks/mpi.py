@@ -88,7 +88,7 @@ def ranks_table(ranks: list[int]) -> tuple[list[dict], str]:
 def _tangent(solver):
     """The displacement tangent as one plain NGSolve form, with a BDDC preconditioner registered."""
     import ngsolve as ngs
-    from ngtmc.discrete.energy_forms import merged_terms
+    from ngtmc.discrete import merged_terms
     trial = solver.fes_u.TrialFunction()
     a = ngs.BilinearForm(solver.fes_u, symmetric=True)
     for name, density, regions in merged_terms(solver.energy_terms(trial)):

@@ -25,7 +25,7 @@ from pathlib import Path
 import ngsolve as ngs
 
 import ngtmc
-from ngtmc.simulation.loop import StepFailure
+from ngtmc.simulation import StepFailure
 from ngtmc.study import load_study
 from ngtmc.study import study_parameters
 

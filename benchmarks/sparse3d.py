@@ -36,7 +36,7 @@ def measure(resolution: str, matrix: str, solver: str, threads: int, symmetry: s
     import ngsolve as ngs
 
     import ngtmc
-    from ngtmc.coupled.monolithic import CoupledNewton
+    from ngtmc.coupled import CoupledNewton
     from ngtmc.runner.cases import peak_memory_mb
     from ngtmc.study import load_study
     from ngtmc.study import study_parameters

@@ -39,20 +39,20 @@ if (not (_Path(__file__).resolve().parent / "studies").is_dir()
         and _SourceTreeStudies not in _sys.meta_path):
     _sys.meta_path.insert(0, _SourceTreeStudies)
 
-from ngtmc.model.materials import Material  # noqa: E402
-from ngtmc.scene.conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
-from ngtmc.scene.scene import Regulariser, Scene  # noqa: E402
-from ngtmc.scene.warnings import ElementWarning, ResolutionWarning
-from ngtmc.scene.warnings import ScaleWarning  # noqa: E402
-from ngtmc.scene.gmsh import read_gmsh  # noqa: E402
-from ngtmc.simulation.history import HISTORY_UNITS  # noqa: E402
-from ngtmc.simulation.loop import Simulation, SimulationResult, StepFailure  # noqa: E402
-from ngtmc.discrete.solver import NewtonOptions, Solver  # noqa: E402
-from ngtmc.stepping.control import AdaptiveStepControl, Schedule  # noqa: E402
+from ngtmc.model import Material  # noqa: E402
+from ngtmc.scene import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: E402
+from ngtmc.scene import Regulariser, Scene  # noqa: E402
+from ngtmc.scene import ElementWarning, ResolutionWarning
+from ngtmc.scene import ScaleWarning  # noqa: E402
+from ngtmc.scene import read_gmsh  # noqa: E402
+from ngtmc.simulation import HISTORY_UNITS  # noqa: E402
+from ngtmc.simulation import Simulation, SimulationResult, StepFailure  # noqa: E402
+from ngtmc.discrete import NewtonOptions, Solver  # noqa: E402
+from ngtmc.stepping import AdaptiveStepControl, Schedule  # noqa: E402
 from ngtmc.adapt import Adaptivity  # noqa: E402
-from ngtmc.scene.extrude import extrude  # noqa: E402
+from ngtmc.scene import extrude  # noqa: E402
 from ngtmc.scene import distributed  # noqa: E402  (the module, public since 0.1)
-from ngtmc.scene.distributed import distribute  # noqa: E402
+from ngtmc.scene import distribute  # noqa: E402
 
 from ngtmc.version import __version__  # noqa: E402
 

@@ -103,7 +103,7 @@ def show_study(name: str) -> str:
     """Text describing a study: title, summary, every parameter with its default and unit (mm, N,
     MPa, ...) and description, and the mesh and step sizes of each resolution."""
     import textwrap
-    from ngtmc.study.parameters import guess_unit
+    from ngtmc.study import guess_unit
     from ngtmc.study import load_study
     mod = load_study(name)
     lines = [f"{mod.NAME.replace('_', '-')}: {getattr(mod, 'TITLE', '')}"]

@@ -20,9 +20,9 @@ import ngsolve as ngs
 
 import ngtmc
 from ngtmc import sensitivities as sens
-from ngtmc.simulation.history import force_unit
-from ngtmc.study.run_files import write_atomic, write_json, write_npz
-from ngtmc.study.parameters import run_description
+from ngtmc.simulation import force_unit
+from ngtmc.study import write_atomic, write_json, write_npz
+from ngtmc.study import run_description
 
 
 def _study():

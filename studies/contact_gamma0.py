@@ -203,7 +203,7 @@ def build_classical(p: dict, penalty_value: float | None = None):
 
     It uses the very mesh of the third-medium scene with the void left out (``regions``), so that
     reference and TMC solutions share the beams' discretisation and differ only by the void."""
-    from ngtmc.classical.penalty_contact import PenaltyContact
+    from ngtmc.classical import PenaltyContact
 
     return PenaltyContact(
         build_mesh(p, void=True), {"lower|upper": material(p)},

@@ -394,7 +394,7 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.simulation.history import peak_index
+from ngtmc.simulation import peak_index
 from ngtmc.study import data_path
 from ngtmc.study import Case
 from ngtmc.study import SOLVER_PARAMETERS, simulation_options

@@ -440,7 +440,7 @@ def build_mesh(p: dict):
 def check_parameters(p: dict):
     """Raise StudyError naming the parameter if ``loading``, ``split``, ``formulation`` or
     ``notch_shape`` is not one of its values, or if the sizes cannot make the mesh."""
-    from ngtmc.model.splits import FORMULATIONS, SPLITS
+    from ngtmc.model import FORMULATIONS, SPLITS
     for key, valid in (("loading", _geometry.LOADINGS), ("split", SPLITS), ("formulation", FORMULATIONS),
                        ("notch_shape", _geometry.NOTCH_SHAPES)):
         value = p.get(key, PARAMETERS[key][0])

@@ -328,7 +328,7 @@ def test_coupled_newton_follows_the_refined_mesh_without_a_rebuild():
     through a refinement: on the refined mesh its residual and tangent equal those of a
     CoupledNewton built there afresh, in a scene with a phase field and a regulariser (order 2 in
     the void only), and it solves the step."""
-    from ngtmc.coupled.monolithic import CoupledNewton
+    from ngtmc.coupled import CoupledNewton
     base = two_blocks(maxh=0.2, void_maxh=0.05)
     scene = adapt.private_scene(dataclasses.replace(
         base, materials={".*": ngtmc.Material(1000.0, 0.3, 0.05, 0.1)}, fracture_regions="lower|upper"))

@@ -82,7 +82,7 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     crack along y = 0.5, the corridor holds the coarse elements ahead of the front within the
     half width of the crack's line, up to the plate's right edge, and none behind the front or
     off the line; none without damage or without a marked fracture element."""
-    from ngtmc.adapt.corridor import corridor
+    from ngtmc.adapt import corridor
     w = 0.12
     s = _plate_cracked_to(0.5)
     c = centroids(s.mesh)
@@ -116,7 +116,7 @@ def test_corridor_runs_on_the_crack_across_the_fronts_opening_not_along_an_off_l
     along x on the crack's line y = 0.5, not through the front's centroid; unstretched (no
     opening), it follows the ray from the front's centroid."""
     import ngsolve as ngs
-    from ngtmc.adapt.corridor import corridor
+    from ngtmc.adapt import corridor
     w = 0.08
     s = _plate_cracked_to(0.5)
     c = centroids(s.mesh)
@@ -196,7 +196,7 @@ def test_the_default_corridor_is_four_l0_in_2d_and_none_in_3d():
     import ngsolve as ngs
     import ngtmc
     from ngtmc.adapt import CORRIDOR_L0
-    from ngtmc.discrete.solver import Solver
+    from ngtmc.discrete import Solver
     from scenes import notched_plate, tension_bar
     assert Adaptivity(h_crack=0.01).corridor == "auto" and CORRIDOR_L0 == 4.0
     with pytest.raises(ValueError, match="corridor = 'wide'"):
@@ -251,7 +251,7 @@ def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_
     import ngsolve as ngs
     import ngtmc
     from ngtmc.adapt import remesh
-    from ngtmc.adapt.corridor import corridor, strip
+    from ngtmc.adapt import corridor, strip
     w, h = 0.08, 0.03
     s = _plate_cracked_to(0.5)
     s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))

@@ -150,3 +150,17 @@ def test_a_built_wheel_holds_every_module(tmp_path):
     want |= {"ngtmc/studies/" + p.name for p in (ROOT / "studies").glob("*.py")}
     missing = sorted(want - names)
     assert not missing, f"modules missing from the wheel: {missing}"
+
+
+def test_a_subpackage_is_imported_through_its_face():
+    """A module of ngtmc imports another subpackage through that subpackage's face (its
+    ``__init__``), never from the modules behind it; inside its own subpackage it imports modules."""
+    bad = []
+    for path in (ROOT / "ngtmc").rglob("*.py"):
+        rel = path.relative_to(ROOT).parts
+        home = rel[1] if len(rel) > 2 else None
+        for module, names in _imports(path):
+            parts = module.split(".")
+            if len(parts) > 2 and parts[1] != home:
+                bad.append(f"{'/'.join(rel)}: from {module} import {', '.join(names)}")
+    assert not bad, "\n".join(sorted(bad))

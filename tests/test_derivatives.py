@@ -7,7 +7,7 @@ from netgen.geom2d import unit_square
 
 from ngtmc.model import regularisation as creg
 from ngtmc.model import fracture
-from ngtmc.model.materials import psi_dev, psi_vol
+from ngtmc.model import psi_dev, psi_vol
 
 
 @pytest.fixture(scope="module")

@@ -104,7 +104,7 @@ def test_displacement_newton_accepts_at_its_residual_floor(floor):
     floor. The displacement Newton accepts the iterate there (Solver.floor_rtol, FLOOR_RTOL of the
     reaction scale; the paper L-panel's crack run, 80 mm in, had a floor above its tolerance), and
     counts it; with floor_rtol None (the adjoint's recordings) it fails instead."""
-    from ngtmc.discrete.newton import FLOOR_RTOL
+    from ngtmc.discrete import FLOOR_RTOL
     s = ngtmc.Solver(two_blocks(gap=0.05, gamma0=1e-5), newton=ngtmc.NewtonOptions(rtol=1e-15, atol=1e-30))
     if not floor:
         s.floor_rtol = None

@@ -8,7 +8,7 @@ import ngsolve as ngs
 import pytest
 
 import ngtmc
-from ngtmc.coupled.monolithic import CoupledNewton
+from ngtmc.coupled import CoupledNewton
 from scenes import notched_plate, tension_bar, two_blocks
 
 
@@ -183,7 +183,7 @@ def test_levenberg_solve_of_block_gmres_is_that_of_the_shifted_matrix(mu):
     the shifted diagonal, operator = restored matrix + shift) gives the UMFPACK solution of the
     matrix whose free diagonal is scaled by (1 + mu), to the GMRES tolerance; the assembled
     matrix is left unchanged, and a normal factorization after it solves the unshifted matrix."""
-    from ngtmc.coupled.linear import CoupledLinearSolver
+    from ngtmc.coupled import CoupledLinearSolver
     s, c = _damaged_state(seed=3)
     c.form.AssembleLinearization(c.x.vec)
     A = c.form.mat

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import ngtmc
-from ngtmc.coupled.monolithic import CoupledNewton
+from ngtmc.coupled import CoupledNewton
 from scenes import notched_plate
 
 
@@ -370,7 +370,7 @@ def test_a_secant_predictor_that_inverts_an_element_is_damped(monkeypatch):
 
 def _failing_dissipation(sim):
     """Make every dissipation solve of ``sim`` fail."""
-    from ngtmc.discrete.newton import NewtonResult
+    from ngtmc.discrete import NewtonResult
     c = sim.coupled
     solve = c.solve
 

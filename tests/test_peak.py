@@ -11,7 +11,7 @@ import pytest
 
 import ngtmc
 from ngtmc.report.numbers import case_numbers, reference_peaks
-from ngtmc.simulation.history import peak, peak_index
+from ngtmc.simulation import peak, peak_index
 from ngtmc.runner import case_results
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 import ngtmc
-from ngtmc.stepping.schemes import StepSchemes
-from ngtmc.stepping.control import AdaptiveStepControl, Schedule
+from ngtmc.stepping import StepSchemes
+from ngtmc.stepping import AdaptiveStepControl, Schedule
 
 from scenes import tension_bar, two_blocks
 

@@ -16,7 +16,7 @@ from ngtmc.adapt import carried_state
 from ngtmc.adapt import remesh
 from ngtmc.adapt import Adaptivity
 from ngtmc.adapt.remesh import history_points
-from ngtmc.scene.regions import element_vertices
+from ngtmc.scene import element_vertices
 from scenes import damaged, notched_plate
 
 MAXH = 0.2   # mm, the notched plate's global size below

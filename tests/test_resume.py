@@ -15,8 +15,8 @@ import sys
 import pandas as pd
 import pytest
 
-from ngtmc.study.run_files import CheckpointWarning, effective_status
-from ngtmc.study.parameters import parameters_hash
+from ngtmc.study import CheckpointWarning, effective_status
+from ngtmc.study import parameters_hash
 from ngtmc.runner import run_study
 from ngtmc.study import StudyError
 from ngtmc.study.parameters import ADDED_AT_DEFAULT, INERT_WITHOUT_REFINEMENT
@@ -209,7 +209,7 @@ def test_a_refined_run_recorded_before_the_default_corridor_resumes_without_one(
     (ngtmc.study.registry.DEFAULT_CHANGED): a refined run recorded before, with amr_corridor at 0 or not
     named at all, resumes with no corridor; one recorded after resumes with "auto"; one recorded
     with a width given resumes with it."""
-    from ngtmc.study.parameters import resume_parameters, run_description
+    from ngtmc.study import resume_parameters, run_description
     from ngtmc.study import load_study
     from ngtmc.study.parameters import DEFAULT_CHANGED, simulation_options, study_parameters
     assert DEFAULT_CHANGED == {"amr_corridor": 0.0}
@@ -237,7 +237,7 @@ def test_settings_without_effect_do_not_block_a_resume(tmp_path):
     """The adaptivity settings (h_crack, amr_lookahead, amr_h_void) have no effect while h_crack is
     0: they are not in the parameter hash, and a run recorded before they existed resumes; a run
     recorded with refinement on does not resume without it."""
-    from ngtmc.study.parameters import resume_parameters, run_description
+    from ngtmc.study import resume_parameters, run_description
     from ngtmc.study import load_study
     from ngtmc.study import study_parameters
     mod = load_study("l_panel")

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 import ngtmc
-from ngtmc.stepping.control import AdaptiveStepControl, ControlState, Schedule
+from ngtmc.stepping import AdaptiveStepControl, ControlState, Schedule
 from scenes import tension_bar
 
 

@@ -18,10 +18,10 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import ngtmc  # noqa: E402
-from ngtmc.simulation.plugins import Progress  # noqa: E402
-from ngtmc.simulation.history import force_unit
+from ngtmc.simulation import Progress  # noqa: E402
+from ngtmc.simulation import force_unit
 from ngtmc.study.run_files import SCHEMA_VERSION  # noqa: E402
-from ngtmc.simulation.history import HISTORY_UNITS
+from ngtmc.simulation import HISTORY_UNITS
 from ngtmc.study import StudyError  # noqa: E402
 from scenes import tension_bar  # noqa: E402
 

@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 import ngtmc
-from ngtmc.discrete.solver import Solver
+from ngtmc.discrete import Solver
 from ngtmc.study import Case
 from ngtmc.runner.vtk import DISPLACEMENT, FIELDS, VtkWriter
 from scenes import bar_mesh, tension_bar

@@ -44,7 +44,7 @@ import ngsolve as ngs
 
 from ngtmc.adapt.marking import per_element
 from ngtmc.adapt.record import RefinementRecord
-from ngtmc.scene.regions import element_vertices
+from ngtmc.scene import element_vertices
 
 __all__ = ["refine", "replay", "transfer_history"]
 

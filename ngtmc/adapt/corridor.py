@@ -17,9 +17,9 @@ import ngsolve as ngs
 
 from ngtmc.adapt.marking import at_points, coarse_elements, element_regions, targets
 from ngtmc.adapt.settings import Adaptivity
-from ngtmc.scene.regions import centroids, coordinates
-from ngtmc.model.materials import deformation_gradient
-from ngtmc.scene.regions import element_vertices
+from ngtmc.scene import centroids, coordinates
+from ngtmc.model import deformation_gradient
+from ngtmc.scene import element_vertices
 
 __all__ = ["corridor", "corridor_due", "strip", "Strip", "CORRIDOR_DROP"]
 

@@ -8,7 +8,7 @@ import numpy as np
 import ngsolve as ngs
 
 from ngtmc.adapt.settings import Adaptivity
-from ngtmc.scene.regions import neighbours, within
+from ngtmc.scene import neighbours, within
 
 __all__ = ["mark", "targets", "at_points", "per_element", "element_regions"]
 

@@ -51,13 +51,13 @@ import numpy as np
 import ngsolve as ngs
 
 from ngtmc.adapt.marking import element_regions
-from ngtmc.scene.regions import centroids, coordinates
-from ngtmc.scene.regions import element_vertices
+from ngtmc.scene import centroids, coordinates
+from ngtmc.scene import element_vertices
 from ngtmc.adapt.marking import targets
 from ngtmc.adapt.record import RefinementRecord
 from ngtmc.adapt.carried_state import balance, equilibrate
-from ngtmc.coupled.monolithic import CoupledNewton
-from ngtmc.discrete.solver import Solver
+from ngtmc.coupled import CoupledNewton
+from ngtmc.discrete import Solver
 from ngtmc.adapt.settings import HISTORY_TRANSFERS  # how the history is carried to a new mesh
 
 __all__ = ["Remesher", "transfer", "locate", "history_points", "move", "remesh_step"]

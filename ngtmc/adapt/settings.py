@@ -59,9 +59,9 @@ import math
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.discrete.dissipation import Dissipation
-from ngtmc.model.materials import check_number
-from ngtmc.scene.regions import coordinates, element_vertices
+from ngtmc.discrete import Dissipation
+from ngtmc.model import check_number
+from ngtmc.scene import coordinates, element_vertices
 
 __all__ = ["Adaptivity", "CORRIDOR_L0", "HISTORY_TRANSFERS", "private_scene", "check_solver"]
 

@@ -39,10 +39,10 @@ import numpy as np
 import pandas as pd
 import ngsolve as ngs
 
-from ngtmc.model.materials import Material, deformation_gradient, psi_dev, psi_vol
-from ngtmc.scene.conditions import DisplacementLoad, Support
-from ngtmc.stepping.control import Schedule
-from ngtmc.discrete.newton import lifted_direction, meets, residual_split
+from ngtmc.model import Material, deformation_gradient, psi_dev, psi_vol
+from ngtmc.scene import DisplacementLoad, Support
+from ngtmc.stepping import Schedule
+from ngtmc.discrete import lifted_direction, meets, residual_split
 
 __all__ = ["PenaltyContact", "ContactResult", "penalty_sweep"]
 

@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from ngtmc.discrete.solver import NewtonResult
+from ngtmc.discrete import NewtonResult
 from ngtmc.coupled import settings as C
 
 __all__ = ["Iteration"]

@@ -34,12 +34,12 @@ import numpy as np
 import ngsolve as ngs
 
 from ngtmc.coupled.linear import FACTOR_REUSE, LINEAR_SOLVERS, CoupledLinearSolver
-from ngtmc.discrete.dissipation import Dissipation
-from ngtmc.discrete.spaces import bilinear_form
-from ngtmc.discrete.energy_forms import QuadraticPlus, merged_terms
-from ngtmc.discrete.solver import NewtonResult
-from ngtmc.discrete.newton import meets
-from ngtmc.discrete.phase_field import history_pieces, phase_field_piece
+from ngtmc.discrete import Dissipation
+from ngtmc.discrete import bilinear_form
+from ngtmc.discrete import QuadraticPlus, merged_terms
+from ngtmc.discrete import NewtonResult
+from ngtmc.discrete import meets
+from ngtmc.discrete import history_pieces, phase_field_piece
 
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 

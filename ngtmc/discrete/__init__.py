@@ -2,3 +2,17 @@
 forms (energy_forms, displacement_energy), the displacement Newton (newton), the phase field and its
 dissipation, boundary conditions, the compiled-code cache, and the Solver that holds one scene's
 discrete state."""
+from ngtmc.discrete.dissipation import Dissipation
+from ngtmc.discrete.energy_forms import QuadraticPlus, merged_terms
+from ngtmc.discrete.newton import (
+    FLOOR_RTOL, NewtonOptions, NewtonResult, lifted_direction, meets, residual_split,
+)
+from ngtmc.discrete.phase_field import history_pieces, phase_field_piece
+from ngtmc.discrete.solver import Solver
+from ngtmc.discrete.spaces import bilinear_form, rules
+
+__all__ = [
+    'Dissipation', 'FLOOR_RTOL', 'NewtonOptions', 'NewtonResult', 'QuadraticPlus', 'Solver',
+    'bilinear_form', 'history_pieces', 'lifted_direction', 'meets', 'merged_terms',
+    'phase_field_piece', 'residual_split', 'rules',
+]

@@ -15,7 +15,7 @@ import re
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.scene.conditions import DisplacementLoad, Point, Traction
+from ngtmc.scene import DisplacementLoad, Point, Traction
 
 __all__ = ["BoundaryConditions"]
 

@@ -19,8 +19,8 @@ from ngtmc.model import fracture
 from ngtmc.model import splits
 from ngtmc.discrete.spaces import bilinear_form, real_compile, term_rules
 from ngtmc.discrete.energy_forms import QuadraticPlus, merged_terms
-from ngtmc.model.materials import deformation_gradient, psi_dev, psi_vol
-from ngtmc.scene.regions import regex, region_names
+from ngtmc.model import deformation_gradient, psi_dev, psi_vol
+from ngtmc.scene import regex, region_names
 
 __all__ = ["DisplacementEnergy"]
 

@@ -17,7 +17,7 @@ import ngsolve as ngs
 from ngtmc.model import fracture
 from ngtmc.model import splits
 from ngtmc.discrete.spaces import bilinear_form, rules
-from ngtmc.model.materials import deformation_gradient, psi_dev, psi_plus, psi_vol
+from ngtmc.model import deformation_gradient, psi_dev, psi_plus, psi_vol
 
 __all__ = ["PhaseFieldHistory", "history_pieces", "phase_field_piece"]
 

@@ -24,17 +24,17 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.comp import IntegrationRuleSpace
 
-from ngtmc.model.materials import deformation_gradient, gamma_interpolation, gc_interpolation
+from ngtmc.model import deformation_gradient, gamma_interpolation, gc_interpolation
 from ngtmc.discrete.boundary_conditions import BoundaryConditions
 from ngtmc.discrete.displacement_energy import DisplacementEnergy
 from ngtmc.discrete.energy_forms import _ExternalWork
 from ngtmc.discrete.phase_field import PhaseFieldHistory
 from ngtmc.discrete.newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
-from ngtmc.scene.distributed import Ranks
+from ngtmc.scene import Ranks
 from ngtmc.discrete.spaces import lower_order_outside
-from ngtmc.scene.conditions import Point, Support, Traction
-from ngtmc.scene.regions import matches, regex, region_names, vertices_of
-from ngtmc.scene.scene import Scene
+from ngtmc.scene import Point, Support, Traction
+from ngtmc.scene import matches, regex, region_names, vertices_of
+from ngtmc.scene import Scene
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from ngtmc.report.loading import (  # noqa: F401
     HISTORY_COLUMNS, load_run, _load, _case_list, _param_value, _case_rows, _find_runs)
-from ngtmc.model.materials import (  # noqa: F401  (Eqs. 17 and 18 under the report's names)
+from ngtmc.model import (  # noqa: F401  (Eqs. 17 and 18 under the report's names)
     gamma_interpolation as gamma_of_rho, gc_interpolation as gc_ratio_of_rho)
 from ngtmc.report.numbers import (  # noqa: F401
     _finite, fmt, fmt_u, _pct, fmt_duration, fmt_date, _rs, _UNIT_PREFIX,

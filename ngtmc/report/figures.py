@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ngtmc.report.loading import _case_rows, _param_value
-from ngtmc.model.materials import gamma_interpolation, gc_interpolation
+from ngtmc.model import gamma_interpolation, gc_interpolation
 from ngtmc.report.numbers import _finite, _rs, fmt, unit_factor
 from ngtmc.report.plot_style import (CASE_COLORS, REF_COLORS, _axis, _layout, _legend_below, _legend_rows, _line, _log_axis,
                          _log_toggle)

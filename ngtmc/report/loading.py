@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ngtmc.simulation.history import HISTORY_UNITS as _HISTORY_UNITS
-from ngtmc.study.run_files import effective_status
+from ngtmc.simulation import HISTORY_UNITS as _HISTORY_UNITS
+from ngtmc.study import effective_status
 
 
 #: Columns of ``history.csv`` (docs/run-directory.md) with their units, from the one definition

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ngtmc.simulation.history import peak
+from ngtmc.simulation import peak
 from ngtmc.report.loading import _case_list, _case_rows, _param_value
 
 

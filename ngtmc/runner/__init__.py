@@ -35,8 +35,8 @@ a user's own scene (:mod:`ngtmc.runner.user_scene`).
 from ngtmc.runner.folder import case_results
 from ngtmc.runner.study_run import default_output, execute, run_study
 from ngtmc.runner.user_scene import run_scene, scene_study, simulate
-from ngtmc.simulation.history import HISTORY_COLUMNS
-from ngtmc.study.run_files import write_atomic
+from ngtmc.simulation import HISTORY_COLUMNS
+from ngtmc.study import write_atomic
 
 __all__ = ["run_study", "run_scene", "scene_study", "simulate", "default_output", "HISTORY_COLUMNS", "case_results",
            "write_atomic"]

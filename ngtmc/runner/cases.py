@@ -11,17 +11,17 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ngtmc.simulation.plugins import Progress, RowCallbacks
+from ngtmc.simulation import Progress, RowCallbacks
 from ngtmc.runner.outputs import CheckpointOutput, SnapshotOutput
-from ngtmc.scene.warnings import ResolutionWarning
+from ngtmc.scene import ResolutionWarning
 from ngtmc.runner.snapshots import Snapshots
 from ngtmc.study import StudyError
 from ngtmc.study import Case
 from ngtmc.runner.folder import CONTROL_SETTINGS, RunFolder, _mesh_info, _threads, case_results
 from ngtmc.runner.rank_snapshots import GatheredSnapshots
-from ngtmc.scene.distributed import distribute, refuse_unsupported
-from ngtmc.simulation.loop import Simulation, StepFailure
-from ngtmc.stepping.control import AdaptiveStepControl, Schedule
+from ngtmc.scene import distribute, refuse_unsupported
+from ngtmc.simulation import Simulation, StepFailure
+from ngtmc.stepping import AdaptiveStepControl, Schedule
 
 __all__ = ["_Run"]
 

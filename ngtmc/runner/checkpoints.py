@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ngtmc.study.run_files import CheckpointWarning, write_npz
+from ngtmc.study import CheckpointWarning, write_npz
 
 __all__ = ["CheckpointStore"]
 

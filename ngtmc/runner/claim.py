@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 import time
 
-from ngtmc.study.run_files import process_alive, process_info
+from ngtmc.study import process_alive, process_info
 from ngtmc.study import StudyError
 
 __all__ = ["CLAIM_FILE", "FolderInUse", "FolderClaim"]

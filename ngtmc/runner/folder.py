@@ -19,10 +19,10 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ngtmc.study.run_files import CheckpointWarning, jsonable, write_atomic, write_json, write_npz
-from ngtmc.study.parameters import parameters_hash, physics_hash, run_description
-from ngtmc.simulation.history import HISTORY_COLUMNS, HISTORY_UNITS, force_unit, peak
-from ngtmc.scene.regions import region_names
+from ngtmc.study import CheckpointWarning, jsonable, write_atomic, write_json, write_npz
+from ngtmc.study import parameters_hash, physics_hash, run_description
+from ngtmc.simulation import HISTORY_COLUMNS, HISTORY_UNITS, force_unit, peak
+from ngtmc.scene import region_names
 from ngtmc.runner.checkpoints import CheckpointStore
 from ngtmc.runner.snapshots import Snapshots
 from ngtmc.study import StudyError

@@ -10,7 +10,7 @@ import time
 from typing import Callable
 
 import ngtmc.report
-from ngtmc.simulation.plugins import Plugin, emit
+from ngtmc.simulation import Plugin, emit
 
 __all__ = ["SnapshotOutput", "CheckpointOutput", "ReportOutput"]
 

@@ -11,19 +11,19 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ngtmc.model.materials import check_number
+from ngtmc.model import check_number
 from ngtmc.runner.folder import CONTROL_SETTINGS
 from ngtmc.runner.study_run import execute
-from ngtmc.scene.distributed import check_supported
-from ngtmc.scene.regions import region_names
-from ngtmc.scene.scene import Scene
-from ngtmc.simulation.history import HISTORY_UNITS
-from ngtmc.simulation.loop import Simulation, SimulationResult
-from ngtmc.simulation.options import RUN_FOLDER_OPTIONS, check_options, simulation_keywords
-from ngtmc.stepping.control import AdaptiveStepControl, Schedule
+from ngtmc.scene import check_supported
+from ngtmc.scene import region_names
+from ngtmc.scene import Scene
+from ngtmc.simulation import HISTORY_UNITS
+from ngtmc.simulation import Simulation, SimulationResult
+from ngtmc.simulation import RUN_FOLDER_OPTIONS, check_options, simulation_keywords
+from ngtmc.stepping import AdaptiveStepControl, Schedule
 from ngtmc.study import StudyError, normalise_name
 from ngtmc.study import Case
-from ngtmc.study.run_files import read_metadata
+from ngtmc.study import read_metadata
 
 __all__ = ["scene_study", "run_scene", "simulate"]
 

@@ -32,9 +32,9 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.model.materials import deformation_gradient, full_deformation_gradient
-from ngtmc.discrete.energy_forms import merged_terms
-from ngtmc.study.run_files import write_atomic
+from ngtmc.model import deformation_gradient, full_deformation_gradient
+from ngtmc.discrete import merged_terms
+from ngtmc.study import write_atomic
 
 __all__ = ["FIELDS", "DISPLACEMENT", "VtkGeometry", "VtkWriter", "pvd_text", "vtu_bytes", "write_pvd", "write_vtu"]
 

@@ -21,11 +21,11 @@ import numpy as np
 import ngsolve as ngs
 
 from ngtmc.scene.conditions import LOAD_KINDS, DisplacementField, DisplacementLoad, Point, Support, Traction, _LETTERS, _where
-from ngtmc.model.materials import Material, check_number
+from ngtmc.model import Material, check_number
 from ngtmc.scene.regions import region_names, vertices_of
 from ngtmc.scene.scale import check_scale
 from ngtmc.scene.warnings import ElementWarning, ResolutionWarning
-from ngtmc.model.splits import check_split
+from ngtmc.model import check_split
 
 if TYPE_CHECKING:
     from ngtmc.scene.scene import Scene

@@ -25,8 +25,8 @@ import ngsolve as ngs
 from ngtmc.scene.regions import PRISM_EDGES, element_vertices, matches, region_names
 from ngtmc.scene.warnings import ElementWarning, ResolutionWarning  # noqa: F401  (re-exported)
 from ngtmc.scene.conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: F401
-from ngtmc.model.materials import Material, check_number
-from ngtmc.model.splits import DEFAULT_FORMULATION, DEFAULT_SPLIT, check_split
+from ngtmc.model import Material, check_number
+from ngtmc.model import DEFAULT_FORMULATION, DEFAULT_SPLIT, check_split
 from ngtmc.scene.checks import check_scene
 from ngtmc.scene.distributed import Ranks
 

@@ -69,7 +69,9 @@ from __future__ import annotations
 
 from ngtmc.sensitivities.adjoint import gradient
 from ngtmc.sensitivities.api import differentiate, record_path
-from ngtmc.sensitivities.checks import active_set_changes, active_sets, directional_derivative, directional_fd, taylor_test
+from ngtmc.sensitivities.checks import (
+    active_set_changes, active_sets, directional_derivative, directional_fd, taylor_test,
+)
 from ngtmc.sensitivities.objectives import (ComplianceAtStep, ExternalWork, FinalFractureEnergy, ForceCurveObjective,
                                            Objective, ReactionAtStep, Seeds, UserObjective, evaluate)
 from ngtmc.sensitivities.path import Path, design_mask, parameter_value, replay

@@ -12,9 +12,9 @@ from typing import Iterable
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.model.materials import deformation_gradient
-from ngtmc.discrete.spaces import rules
-from ngtmc.discrete.solver import Solver
+from ngtmc.model import deformation_gradient
+from ngtmc.discrete import rules
+from ngtmc.discrete import Solver
 from ngtmc.sensitivities.objectives import Objective, Seeds
 from ngtmc.sensitivities.path import Path, _all_parameters, _resolve, refuse_changed_mesh
 

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from ngtmc.discrete.solver import NewtonOptions
-from ngtmc.scene.scene import Scene
+from ngtmc.discrete import NewtonOptions
+from ngtmc.scene import Scene
 from ngtmc.sensitivities.adjoint import gradient
 from ngtmc.sensitivities.coupled import record_coupled_path
 from ngtmc.sensitivities.objectives import Objective
 from ngtmc.sensitivities.path import Path, check_recordable, record_single_pass
-from ngtmc.stepping.control import AdaptiveStepControl, Schedule
+from ngtmc.stepping import AdaptiveStepControl, Schedule
 
 __all__ = ["record_path", "differentiate"]
 

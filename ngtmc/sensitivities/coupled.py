@@ -58,10 +58,10 @@ import ngsolve as ngs
 from ngtmc.sensitivities.adjoint import _Accumulator, _engine, _wrt_keys, history_adjoint
 from ngtmc.sensitivities.objectives import Seeds
 from ngtmc.sensitivities.path import Path, _capture, _reset, _set_parameters, _snapshot_parameters, replay_inputs
-from ngtmc.discrete.phase_field import history_pieces, phase_field_piece
-from ngtmc.scene.scene import Scene
-from ngtmc.simulation.loop import Simulation
-from ngtmc.discrete.newton import FLOOR_RTOL
+from ngtmc.discrete import history_pieces, phase_field_piece
+from ngtmc.scene import Scene
+from ngtmc.simulation import Simulation
+from ngtmc.discrete import FLOOR_RTOL
 
 __all__ = ["CoupledPath", "record_coupled_path", "replay_coupled", "coupled_gradient", "alpha_residual_pieces", "held_sets",
            "COUPLED_SCHEMES"]

@@ -13,12 +13,12 @@ from typing import Sequence
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.scene.conditions import Traction
-from ngtmc.scene.scene import Scene
-from ngtmc.stepping.schemes import alpha_u_passes
-from ngtmc.simulation.loop import Simulation
-from ngtmc.discrete.solver import NewtonOptions, Solver
-from ngtmc.stepping.control import AdaptiveStepControl, Schedule
+from ngtmc.scene import Traction
+from ngtmc.scene import Scene
+from ngtmc.stepping import alpha_u_passes
+from ngtmc.simulation import Simulation
+from ngtmc.discrete import NewtonOptions, Solver
+from ngtmc.stepping import AdaptiveStepControl, Schedule
 
 _MATERIAL_KEYS = ("E", "nu", "Gc", "l0")
 

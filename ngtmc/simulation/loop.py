@@ -23,21 +23,21 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 import pandas as pd
 
-from ngtmc.stepping.path import N_S as PATH_N_S
+from ngtmc.stepping import N_S as PATH_N_S
 from ngtmc.simulation.history import HISTORY_UNITS as _HISTORY_UNITS, peak, peak_index
-from ngtmc.scene.scene import Scene
-from ngtmc.stepping.schemes import PATH_STEPS, SCHEMES, StepSchemes
-from ngtmc.discrete.solver import NewtonOptions, Solver
+from ngtmc.scene import Scene
+from ngtmc.stepping import PATH_STEPS, SCHEMES, StepSchemes
+from ngtmc.discrete import NewtonOptions, Solver
 from ngtmc.simulation.records import RunRecords
 from ngtmc.simulation.refine import RunRefinement
 from ngtmc.simulation.state import RunState
-from ngtmc.stepping.control import AdaptiveStepControl, ControlState, Schedule
+from ngtmc.stepping import AdaptiveStepControl, ControlState, Schedule
 from ngtmc.simulation.options import RUN_FOLDER_OPTIONS, check_options, simulation_keywords
 from ngtmc.adapt import Adaptivity, check_solver, private_scene
-from ngtmc.adapt.remesh import Remesher
-from ngtmc.model.materials import check_number
-from ngtmc.scene.distributed import check_supported
-from ngtmc.scene.scale import check_load_scale
+from ngtmc.adapt import Remesher
+from ngtmc.model import check_number
+from ngtmc.scene import check_supported
+from ngtmc.scene import check_load_scale
 from ngtmc.simulation.history import force_unit
 from ngtmc.simulation.plugins import Progress
 

@@ -6,9 +6,9 @@ attributes ``solver``, ``adapt``, ``coupled``, ``_path``, ``_remesher``, ``rows`
 :mod:`ngtmc.adapt.bisection` and :mod:`ngtmc.adapt.remesh`. Units: mm."""
 from __future__ import annotations
 from ngtmc.adapt import mark
-from ngtmc.adapt.bisection import refine
-from ngtmc.adapt.corridor import corridor, corridor_due, strip
-from ngtmc.adapt.remesh import remesh_step
+from ngtmc.adapt import refine
+from ngtmc.adapt import corridor, corridor_due, strip
+from ngtmc.adapt import remesh_step
 
 __all__ = ["RunRefinement"]
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ngtmc.stepping.control import ControlState
+from ngtmc.stepping import ControlState
 from ngtmc.adapt import RefinementRecord
-from ngtmc.adapt.bisection import replay
-from ngtmc.adapt.remesh import move
+from ngtmc.adapt import replay
+from ngtmc.adapt import move
 
 __all__ = ["RunState"]
 

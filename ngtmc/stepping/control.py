@@ -24,7 +24,7 @@ import math
 from typing import Sequence
 
 import numpy as np
-from ngtmc.model.materials import check_number
+from ngtmc.model import check_number
 
 __all__ = ["Schedule", "AdaptiveStepControl", "ControlState", "attempt_info", "add_solve"]
 

@@ -29,15 +29,11 @@ applied: it bounds the dissipation per step, which the path now does itself):
    attempt of a step (du below 2 du_min, so the run would fail) whose dissipation solve failed,
    whether the crack has arrested (the damage no longer responds to the load: the quick L-panel's
    bordered Newton step asked for a load change of 5e11 mm there) or the solve stalled at every
-   dD (the paper L-panel at 6.2078 mm). Only the last attempt: turning every failed dissipation
-   solve that asked for a large load change into a displacement step turned legitimate snaps,
-   where cut-backs of dD converge, into displacement steps, and the notched plate's 2D and 3D
-   twins then broke along different paths (tests/test_extrude.py).
-   With ``prescale`` (off by default), after a dissipation step, where the secant predictor
-   (rule 6, linear in dD) already moves the load by more than du_max, dD is scaled so before the
-   first solve (the growth factor shrinks with it): in the post-failure tail of the quick 3D
-   hemisphere, where the load moves about 2.3 du_max per base dD, every step was otherwise
-   solved twice.
+   dD (the paper L-panel at 6.2078 mm). Only the last attempt: doing so on every such failure
+   turned legitimate snaps into displacement steps (tests/test_extrude.py).
+   With ``prescale`` (off by default), where the secant predictor (rule 6) already moves the load
+   by more than du_max after a dissipation step, dD is scaled so before the first solve (the
+   quick 3D hemisphere's post-failure tail otherwise solved every step twice).
    On a step's last attempt, a displacement step taken instead of a dissipation step ends, where
    its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``,
    default converged staggered passes at that load; such steps carry ``staggered_iterations``
@@ -73,16 +69,11 @@ from ngtmc.stepping.control import add_solve, attempt_info
 __all__ = ["DissipationPath"]
 
 #: Under path following the step control's scale doubles after every successful step, whatever its
-#: n_s (the paper's 5 applies to the other schemes). The scale, halved by each cut-back, bounds only
-#: the displacement steps here: the dissipation per step keeps its own memory of cut-backs (the
-#: growth factor and its ceiling). With n_s = 5, a crack run whose dissipation steps failed down to
-#: the last attempt went on in displacement steps near du_min and doubled back only every fifth
-#: step: the paper L-panel after 22 halvings at 6.2078 mm (steps of 3.6e-8 mm, 70-90 s each, about
-#: 110 of them to get back to 1e-4 mm), and the three-point bending in Miehe's set-up at quick
-#: stopped at 0.045 mm (an arrested crack at 0.03707 mm: steps of 1.5e-8 mm from step 70, still
-#: 2e-6 mm at step 106; docs/performance.md, "The step control's scale under path following").
+#: n_s (the paper's 5 applies to the other schemes): the dissipation per step keeps its own memory
+#: of cut-backs. With n_s = 5, crack runs went on in displacement steps near du_min for about a
+#: hundred steps (the paper L-panel at 6.2078 mm; the three-point bending in Miehe's set-up; docs/
+#: performance.md, "The step control's scale under path following").
 N_S = 1
-
 
 #: Rule 3: a dissipation step whose load moves (or is predicted to move) more than du_max is sized
 #: to move it by this fraction of du_max.

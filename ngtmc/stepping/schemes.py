@@ -23,9 +23,9 @@ import numpy as np
 
 from ngtmc.stepping.control import add_solve, attempt_info
 from ngtmc.stepping.secant import secant_displacement
-from ngtmc.coupled.linear import CoupledLinearSolver
-from ngtmc.coupled.monolithic import CoupledNewton
-from ngtmc.model.materials import check_number
+from ngtmc.coupled import CoupledLinearSolver
+from ngtmc.coupled import CoupledNewton
+from ngtmc.model import check_number
 from ngtmc.stepping.path import DissipationPath
 
 __all__ = ["SCHEMES", "PATH_STEPS", "StepSchemes", "alpha_u_passes"]

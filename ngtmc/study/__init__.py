@@ -5,7 +5,25 @@ hashes and resume (:mod:`ngtmc.study.parameters`), the files of a run folder
 from ngtmc.study.case import Case
 from ngtmc.study.contract import StudyError, normalise_name
 from ngtmc.study.parameters import SOLVER_PARAMETERS, simulation_options, study_parameters
-from ngtmc.study.registry import STUDIES, data_path, list_studies, load_study, load_study_file, registered_studies
+from ngtmc.study.registry import (
+    STUDIES, data_path, list_studies, load_study, load_study_file, registered_studies,
+)
+from ngtmc.study.records import records
+
+from ngtmc.study.parameters import (
+    guess_unit, parameter_table, parameters_hash, physics_hash, resume_parameters, run_description,
+    typed_overrides,
+)
+from ngtmc.study.run_files import (
+    CheckpointWarning, UNITS, effective_status, git_revision, jsonable, process_alive, process_info,
+    read_metadata, versions, write_atomic, write_json, write_npz,
+)
 
 __all__ = ["Case", "StudyError", "normalise_name", "SOLVER_PARAMETERS", "simulation_options", "study_parameters",
-           "STUDIES", "data_path", "list_studies", "load_study", "load_study_file", "registered_studies"]
+           "STUDIES", "data_path", "list_studies", "load_study", "load_study_file", "registered_studies", "records"]
+__all__ += [
+    'CheckpointWarning', 'UNITS', 'effective_status', 'git_revision', 'guess_unit', 'jsonable',
+    'parameter_table', 'parameters_hash', 'physics_hash', 'process_alive', 'process_info',
+    'read_metadata', 'resume_parameters', 'run_description', 'typed_overrides', 'versions',
+    'write_atomic', 'write_json', 'write_npz',
+]

@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ngtmc.scene.scene import Scene
+from ngtmc.scene import Scene
 from ngtmc.study.contract import StudyError
 
 __all__ = ["Case"]

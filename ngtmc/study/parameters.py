@@ -15,7 +15,7 @@ from types import ModuleType
 import numpy as np
 
 from ngtmc.adapt import Adaptivity
-from ngtmc.simulation.loop import SCHEMES, check_stop_after_drop
+from ngtmc.simulation import SCHEMES, check_stop_after_drop
 from ngtmc.study.contract import StudyError
 from ngtmc.study.run_files import SCHEMA_VERSION, UNITS, git_revision, jsonable, process_info, versions
 
