@@ -33,7 +33,7 @@ def test_history_and_alpha_never_decrease_across_refinement():
     ne_old = s.mesh.ne
     old_pts = history_points(s)
     H_old = s.H_committed.copy().reshape(ne_old, -1)
-    fes_a_old = ngs.H1(old_mesh, order=1, definedon=old_mesh.Materials(s._frac_re))
+    fes_a_old = ngs.H1(old_mesh, order=1, definedon=old_mesh.Materials(s.regions.fracture_regex))
     a_old = ngs.GridFunction(fes_a_old)
     a_old.vec.FV().NumPy()[:] = s.alpha_committed
     marked = adapt.mark(s, Adaptivity(h_crack=0.03, alpha_threshold=0.02))

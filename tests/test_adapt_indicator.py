@@ -82,14 +82,14 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     crack along y = 0.5, the corridor holds the coarse elements ahead of the front within the
     half width of the crack's line, up to the plate's right edge, and none behind the front or
     off the line; none without damage or without a marked fracture element."""
-    from ngtmc.adapt import corridor
+    from ngtmc.adapt import corridor_elements
     w = 0.12
     s = _plate_cracked_to(0.5)
     c = centroids(s.mesh)
     front = (np.abs(c[:, 0] - 0.55) < 0.06) & (np.abs(c[:, 1] - 0.5) < 0.06)
     assert front.any()
     a = Adaptivity(h_crack=0.03, corridor=w)
-    extra = corridor(s, a, front)
+    extra = corridor_elements(s, a, front)
     assert extra.any() and not (extra & front).any()
     tip = c[front].mean(axis=0)
     # ahead of the front and near the crack's line (the ray's direction is within a few degrees of
@@ -102,10 +102,10 @@ def test_corridor_refines_the_straight_path_ahead_of_the_front_only():
     assert on_path.any() and np.all(extra[on_path])
     assert c[extra, 0].max() > 0.85
     # nothing without a front, without damage, or with no width
-    assert not corridor(s, a, np.zeros_like(front)).any()
-    assert not corridor(s, Adaptivity(h_crack=0.03, corridor=0.0), front).any()
+    assert not corridor_elements(s, a, np.zeros_like(front)).any()
+    assert not corridor_elements(s, Adaptivity(h_crack=0.03, corridor=0.0), front).any()
     s.alpha.vec.FV().NumPy()[:] = 0.0
-    assert not corridor(s, a, front).any()
+    assert not corridor_elements(s, a, front).any()
 
 
 def test_corridor_runs_on_the_crack_across_the_fronts_opening_not_along_an_off_line_ray():
@@ -116,7 +116,7 @@ def test_corridor_runs_on_the_crack_across_the_fronts_opening_not_along_an_off_l
     along x on the crack's line y = 0.5, not through the front's centroid; unstretched (no
     opening), it follows the ray from the front's centroid."""
     import ngsolve as ngs
-    from ngtmc.adapt import corridor
+    from ngtmc.adapt import corridor_elements
     w = 0.08
     s = _plate_cracked_to(0.5)
     c = centroids(s.mesh)
@@ -124,10 +124,10 @@ def test_corridor_runs_on_the_crack_across_the_fronts_opening_not_along_an_off_l
     tip = c[front].mean(axis=0)
     a = Adaptivity(h_crack=0.03, corridor=w)
     s.u.vec[:] = 0.0
-    leaning = corridor(s, a, front)            # u = 0: no opening, the ray as it is
+    leaning = corridor_elements(s, a, front)            # u = 0: no opening, the ray as it is
     assert c[leaning, 1].max() > tip[1] + w + 0.1
     s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))
-    along = corridor(s, a, front)
+    along = corridor_elements(s, a, front)
     assert along.any() and c[along, 0].max() > 0.85
     ahead = along & (c[:, 0] > tip[0] + w)
     assert np.all(np.abs(c[ahead, 1] - 0.5) <= w + 0.01)   # the damaged elements' centroid: y = 0.5 to the mesh's asymmetry
@@ -251,7 +251,7 @@ def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_
     import ngsolve as ngs
     import ngtmc
     from ngtmc.adapt import remesh
-    from ngtmc.adapt import corridor, strip
+    from ngtmc.adapt import corridor_elements, strip
     w, h = 0.08, 0.03
     s = _plate_cracked_to(0.5)
     s.u.Set(ngs.CoefficientFunction((0.0, 0.01 * ngs.y)))
@@ -261,8 +261,8 @@ def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_
     rm = remesh.Remesher(s.mesh, 0.2)
     line = strip(s, a, front)
     assert line is not None and abs(line.origin[1] - 0.5) < 0.01 and abs(line.direction[0]) > 0.999
-    by_centroid = corridor(s, a, front, line=line)
-    extra = corridor(s, a, front, remesher=rm, line=line)
+    by_centroid = corridor_elements(s, a, front, line=line)
+    extra = corridor_elements(s, a, front, remesher=rm, line=line)
     assert np.all(extra[by_centroid]) and extra.sum() > by_centroid.sum()
     t = adapt.targets(s, a)
     whole = remesh.Remesher(s.mesh, 0.2).add(s.mesh, extra, t)

@@ -1,4 +1,4 @@
-"""Adaptive refinement of an extruded slab of prisms (ngtmc.scene.extrude; ngtmc.adapt, ngtmc.adapt.bisection):
+"""Adaptive refinement of an extruded slab of prisms (ngtmc.scene.extrusion; ngtmc.adapt, ngtmc.adapt.bisection):
 NGSolve bisects a prism across its triangles only, so the slab keeps its layers; u is carried
 exactly at order 2 (through a copy of the mesh, where NGSolve's prolongation loses the quadratic
 part and its exact prolongation is not available), H and alpha never decrease, a homogeneous
@@ -11,7 +11,7 @@ import pytest
 import ngtmc
 from ngtmc import adapt
 from ngtmc.adapt import Adaptivity
-from ngtmc.scene.extrude import plane_strain_slab
+from ngtmc.scene.extrusion import plane_strain_slab
 from scenes import (bar_mesh, damaged, homogeneous_state_kept_in_3d, notched_plate, plain_prolongation_error,
                     refine_and_check_the_transfer_in_3d)
 

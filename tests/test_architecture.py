@@ -6,6 +6,7 @@ these has an exception."""
 from __future__ import annotations
 
 from pathlib import Path
+import inspect
 import subprocess
 import sys
 import zipfile
@@ -164,3 +165,17 @@ def test_a_subpackage_is_imported_through_its_face():
             if len(parts) > 2 and parts[1] != home:
                 bad.append(f"{'/'.join(rel)}: from {module} import {', '.join(names)}")
     assert not bad, "\n".join(sorted(bad))
+
+
+def test_no_face_hides_a_module_behind_a_name():
+    """A name a face exports is never the name of one of its subpackage's modules: ``from
+    ngtmc.scene import extrude`` would give the function and ``ngtmc.scene.extrude`` the module."""
+    import importlib
+    clashes = []
+    for sub in SUBPACKAGES:
+        face = importlib.import_module(f"ngtmc.{sub}")
+        for path in (ROOT / "ngtmc" / sub).glob("*.py"):
+            name = path.stem
+            if name != "__init__" and hasattr(face, name) and not inspect.ismodule(getattr(face, name)):
+                clashes.append(f"ngtmc.{sub}.{name}")
+    assert not clashes, clashes

@@ -100,7 +100,7 @@ def test_short_optimisation_improves_the_objective(tmp_path):
 
 
 def test_run_metadata_follows_the_run_folder_schema(tmp_path):
-    """The optimisation's metadata.json is built from ngtmc.study.run_files.run_description (no copy of
+    """The optimisation's metadata.json is built from ngtmc.study.parameters.run_description (no copy of
     its own): schema version, every parameter with its unit, the overrides and both hashes."""
     from ngtmc.study.run_files import SCHEMA_VERSION, UNITS, read_metadata, write_json
     from ngtmc.study import parameters_hash, run_description

@@ -1,4 +1,4 @@
-"""Extruded slabs (ngtmc.scene.extrude): the mesh, and a 3D plane-strain run against its 2D twin."""
+"""Extruded slabs (ngtmc.scene.extrusion): the mesh, and a 3D plane-strain run against its 2D twin."""
 import numpy as np
 import ngsolve as ngs
 import pytest
@@ -6,7 +6,7 @@ from netgen.occ import Glue, MoveTo, OCCGeometry, Rectangle
 
 import ngtmc
 from ngtmc.model.regularisation import phi_bar
-from ngtmc.scene.extrude import plane_strain_slab
+from ngtmc.scene.extrusion import plane_strain_slab
 from scenes import notched_plate
 
 

@@ -104,9 +104,9 @@ def test_the_history_points_are_the_elastic_points_exactly_when_the_solver_says_
     and the removal of g'(alpha) Psi_d into one integrand: that is exact only if both rules are
     the same points, which an integrand no rule integrates exactly tells."""
     s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1, order=order))
-    frac = s.mesh.Materials(s._frac_re)
+    frac = s.mesh.Materials(s.regions.fracture_regex)
     cf = ngs.exp(7 * ngs.x * ngs.y) * ngs.sin(13 * ngs.x + 5 * ngs.y)
-    elastic = ngs.Integrate(cf * s.energy_measure("elastic_vol", s._frac_re), s.mesh)
+    elastic = ngs.Integrate(cf * s.energy_measure("elastic_vol", s.regions.fracture_regex), s.mesh)
     history = ngs.Integrate(cf * ngs.dx(definedon=frac, intrules=s.irs.GetIntegrationRules()), s.mesh)
     same = abs(elastic - history) <= 1e-13 * abs(history)
     assert s.elastic_rule_is_history_rule() == same

@@ -21,7 +21,7 @@ from scenes import notched_plate  # noqa: E402
 
 import ngtmc  # noqa: E402
 from ngtmc import report  # noqa: E402
-from ngtmc.scene.extrude import plane_strain_slab  # noqa: E402
+from ngtmc.scene.extrusion import plane_strain_slab  # noqa: E402
 from ngtmc.report.mesh_frames import deformation_scale  # noqa: E402
 from ngtmc.report.figures3d import frames_3d, snapshot_figures_3d  # noqa: E402
 

@@ -5,7 +5,7 @@ Thickness convention: ``Scene(thickness=100)``, the Winkler panel's, so every fo
 whole panel in N and compares directly with the paper's 7.6 kN = 7600 N. k_u = 50 is in 1/N with
 W_f per unit thickness (the history's fracture_energy is for the whole panel, 100 times that).
 
-Measured at quick (8516 elements, h_band = 2 mm = 1.7 l0; see the study's MEASURED and EXPECTED):
+Measured at quick (8516 elements, h_band = 2 mm = 1.7 l0; see the study's records and EXPECTED):
 the first loading does not reach its peak before the turning point (17.9 kN at 6.3 mm, diffuse
 damage, max alpha 0.41);
 the crack runs on reloading, from a peak of 23.6 kN at 6.46 mm. The published reload peak (7.6 kN)
@@ -26,11 +26,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ngtmc.study import load_study
+from ngtmc.study import load_study, records
 from ngtmc.study import study_parameters
 from study_expected import expected_test
 
 S = load_study("l_panel")
+#: the measured runs of the study (studies/records/l_panel.json): record key -> figures
+MEASURED = {key: rec["figures"] for key, rec in records("l_panel").items()}
+L0_SWEEP = [MEASURED[key] for key in S.L0_SWEEP_KEYS]
+WHOLE_WIDTH = [MEASURED[key] for key in S.WHOLE_WIDTH_KEYS]
 
 
 @pytest.fixture(scope="module")
@@ -149,7 +153,7 @@ def test_load_cases_option():
 
 
 def test_l0_sweep_record():
-    """The recorded l0 sweep (L0_SWEEP, the study docstring's table): its largest l0 is the one at
+    """The recorded l0 sweep (L0_SWEEP, the study's records): its largest l0 is the one at
     which AT-2's homogeneous strength 3 sqrt(3)/16 sqrt(E Gc / l0) is concrete's 2.7 MPa, the quick
     band resolves every l0 but today's (h_band <= l0/2), the peak falls as l0 grows, and no l0
     reaches Winkler's 6.7-7.6 kN band (the study's conclusion). A record check: the sweep itself is
@@ -159,10 +163,10 @@ def test_l0_sweep_record():
     assert l0_t == pytest.approx(33.33, abs=0.01)
     assert S.at2_strength(E, Gc, l0_t) == pytest.approx(2.7, rel=1e-12)
     assert S.at2_strength(E, Gc, S.PARAMETERS["l0"][0]) == pytest.approx(14.3, abs=0.05)  # the docstring's
-    rows = [r for r in S.L0_SWEEP if r["h_far"] == S.RESOLUTIONS["quick"]["h_far"]]
+    rows = [r for r in L0_SWEEP if r["h_far"] == S.RESOLUTIONS["quick"]["h_far"]]
     l0s = [r["l0"] for r in rows]
     assert l0s[0] == S.PARAMETERS["l0"][0] and l0s[-1] == pytest.approx(l0_t, abs=0.01) and l0s == sorted(l0s)
-    assert all(r["h_band"] == S.RESOLUTIONS["quick"]["h_band"] for r in S.L0_SWEEP)
+    assert all(r["h_band"] == S.RESOLUTIONS["quick"]["h_band"] for r in L0_SWEEP)
     assert [r["h_band"] <= r["l0"] / 2 for r in rows] == [False] + [True] * (len(rows) - 1)
     peaks = [r["peak_force"] for r in rows]
     assert all(a > b for a, b in zip(peaks, peaks[1:]))
@@ -171,7 +175,7 @@ def test_l0_sweep_record():
     assert S.EXPECTED["monotonic_peak_force"]["value"] == rows[0]["peak_force"]
     assert S.EXPECTED["monotonic_peak_load"]["value"] == rows[0]["peak_load"]
     # the far-mesh check of the largest l0: within 2 %
-    fine = [r for r in S.L0_SWEEP if r["h_far"] < S.RESOLUTIONS["quick"]["h_far"]]
+    fine = [r for r in L0_SWEEP if r["h_far"] < S.RESOLUTIONS["quick"]["h_far"]]
     assert fine and fine[0]["peak_force"] == pytest.approx(rows[-1]["peak_force"], rel=0.02)
     fig = S.figures(study_parameters(S, "quick")[1])[0]
     curve = fig["series"][0]
@@ -179,34 +183,34 @@ def test_l0_sweep_record():
 
 
 def test_reload_peak_record():
-    """The recorded reload peaks of a cracked panel (MEASURED, the study docstring's table and the
+    """The recorded reload peaks of a cracked panel (MEASURED, the study's records and the
     report's second figure): the paper's single-pass scheme lets the damage grow while unloading,
     yet reloads higher than path following, so it does not explain the paper's lower 7.6 kN; nor
     does the mesh: with the paper's schedule medium and the paper's resolution agree; nor does the
     split (spectral against J-based vol-dev at medium), nor the load introduction (a held segment
     without indenter and void reloads higher; half the indenter's radius reloads the same); at
     the paper's resolution the reload peak lies 16.2 % above 7.6 kN."""
-    turn = S.MEASURED["quick_turn_past_the_peak_2026_12_03"]
+    turn = MEASURED["quick_turn_past_the_peak_2026_12_03"]
     pf, sp = turn["path_following"], turn["single_pass"]
     assert pf["unload_wf_growth"] == 0.0 and sp["unload_wf_growth"] > 0.4 * sp["wf_at_turning_point"]
     assert sp["reload_peak_force"] > pf["reload_peak_force"] > 7600.0
-    paper = S.MEASURED["paper_path_following_completed_2026_12_03"]
+    paper = MEASURED["paper_path_following_completed_2026_12_03"]
     assert paper["reload_peak_force"] / 7600.0 - 1.0 == pytest.approx(0.162, abs=0.001)
     fig = S.figures(study_parameters(S, "quick")[1])[1]
     ys = [s["y"][0] for s in fig["series"] if s["kind"] == "points"]
     med = turn["path_following_medium"]
-    med6 = S.MEASURED["medium_path_following_paper_schedule_2026_12_03"]
-    spectral = S.MEASURED["medium_path_following_paper_schedule_spectral_2026_12_04"]
+    med6 = MEASURED["medium_path_following_paper_schedule_2026_12_03"]
+    spectral = MEASURED["medium_path_following_paper_schedule_spectral_2026_12_04"]
     assert ys == [pf["reload_peak_force"], sp["reload_peak_force"], med["reload_peak_force"],
                   med6["reload_peak_force"], spectral["reload_peak_force"], paper["reload_peak_force"]]
     # nor does the split: Miehe's spectral split reloads to the J-based vol-dev split's peak
     assert spectral["reload_peak_force"] == pytest.approx(med6["reload_peak_force"], rel=1e-3)
     # nor does the load introduction: without indenter and void (a held segment) the reload peak
     # at medium is higher, not lower
-    segment = S.MEASURED["medium_path_following_segment_2026_12_04"]
+    segment = MEASURED["medium_path_following_segment_2026_12_04"]
     assert segment["reload_peak_force"] > 1.05 * med6["reload_peak_force"]
     # nor the indenter's radius (ours, 20 mm): halved, the reload peak moves by 0.2 %
-    r10 = S.MEASURED["medium_path_following_indenter_r10_2026_12_04"]
+    r10 = MEASURED["medium_path_following_indenter_r10_2026_12_04"]
     assert r10["reload_peak_force"] == pytest.approx(med6["reload_peak_force"], rel=0.01)
     # turning point 6.6 mm: quick is too coarse, the reload peak falls to medium by about the square
     # root of the toughness factors
@@ -231,8 +235,8 @@ def test_reload_peak_against_l0_record():
     (their tips at x = 134-149 mm, near the band's end at 150 mm). The report's third figure shows
     the same numbers."""
     l0s = (1.1875, 2.375, 4.75)
-    rec = [S.MEASURED[S.MEDIUM_PAPER_SCHEDULE_BY_L0[l0]] for l0 in l0s]
-    assert rec[0] is S.MEASURED["medium_path_following_paper_schedule_2026_12_03"]
+    rec = [MEASURED[S.MEDIUM_PAPER_SCHEDULE_BY_L0[l0]] for l0 in l0s]
+    assert rec[0] is MEASURED["medium_path_following_paper_schedule_2026_12_03"]
     assert [r.get("l0", S.PARAMETERS["l0"][0]) for r in rec] == list(l0s)
     first = [r["first_loading_peak_force"] for r in rec]
     reload = [r["reload_peak_force"] for r in rec]
@@ -252,9 +256,9 @@ def test_reload_peak_set_by_the_band_end_record():
     band's end by the turning point in both runs (x = 149 and 100 mm), so the wider band's crack is
     50 mm longer there and the reload peak halves, from above the paper's 7.6 kN to below it. The
     report's third figure shows the point."""
-    band = S.MEASURED["medium_path_following_paper_schedule_2026_12_03"]
-    r10 = S.MEASURED["medium_path_following_indenter_r10_2026_12_04"]  # reloads as band does, crack_x recorded
-    wide = S.MEASURED["medium_path_following_band_left_100_2026_12_05"]
+    band = MEASURED["medium_path_following_paper_schedule_2026_12_03"]
+    r10 = MEASURED["medium_path_following_indenter_r10_2026_12_04"]  # reloads as band does, crack_x recorded
+    wide = MEASURED["medium_path_following_band_left_100_2026_12_05"]
     assert S.PARAMETERS["band_left"][0] == 150.0 and wide["band_left"] == 100.0
     assert r10["crack_x_at_turning_point"] == pytest.approx(150.0, abs=2.0)
     assert wide["crack_x_at_turning_point"] == pytest.approx(100.0, abs=2.0)
@@ -273,9 +277,9 @@ def test_a_crack_free_to_run_breaks_the_panel_record():
     100 mm) while the load stays below 6.3 mm, and by the turning point it has run through the
     panel's 250 mm width (x = 250 -> 4.3 mm), so reloading finds no peak, only a force below 3 % of the 100 mm
     band's reload peak: a crack resolved wherever it runs does not stop at l0 = 1.1875 mm, so the
-    study's reload peaks are bounds set by the band (docstring, "The refined band's end sets it")."""
-    wide = S.MEASURED["medium_path_following_band_left_100_2026_12_05"]
-    free = S.MEASURED["medium_path_following_band_left_0_2026_12_05"]
+    study's reload peaks are bounds set by the band (records medium_path_following_band_left_*)."""
+    wide = MEASURED["medium_path_following_band_left_100_2026_12_05"]
+    free = MEASURED["medium_path_following_band_left_0_2026_12_05"]
     assert free["band_left"] == 0.0 and free["status"] == "finished"
     assert free["first_loading_peak_force"] == pytest.approx(wide["first_loading_peak_force"], rel=2e-3)
     track = free["crack_track"]
@@ -297,22 +301,22 @@ def test_whole_width_runs_break_the_panel_at_every_l0_record():
     panel reloads to no peak, while the same quick run with the study's band (from x = 150 mm)
     arrests its crack near the band's end, reaches the same first-loading peak and reloads to a
     peak 70 times the whole width's force at 6.3 mm. The report's third figure shows the points."""
-    free = [r for r in S.WHOLE_WIDTH if r["band_left"] == 0.0 and r["status"] == "finished"]
+    free = [r for r in WHOLE_WIDTH if r["band_left"] == 0.0 and r["status"] == "finished"]
     assert {r["l0"] for r in free} >= {1.1875, 4.75}
     for r in free:
         assert r["crack_x_at_turning_point"] < 0.05 * 250.0 and r["reload_peak_force"] is None
         assert r["force_at_turning_point"] < 0.01 * r["first_loading_peak_force"]
         assert r["reload_largest_force"] < 1.1 * r["force_at_turning_point"]
         assert r["snap_back_lowest_load"] < 6.3
-    (band,) = [r for r in S.WHOLE_WIDTH if r["band_left"] == 150.0]
+    (band,) = [r for r in WHOLE_WIDTH if r["band_left"] == 150.0]
     (twin,) = [r for r in free if r["l0"] == band["l0"] and r["resolution"] == band["resolution"]]
     assert band["first_loading_peak_force"] == pytest.approx(twin["first_loading_peak_force"], rel=0.01)
     assert band["crack_x_at_turning_point"] == pytest.approx(150.0, abs=15.0)
     assert band["reload_peak_force"] > 70.0 * twin["force_at_turning_point"]
     # the unfinished medium run at 4 x l0: its crack passes where the band's crack stood at the turning
     # point while the load is still below 6.3 mm, and runs on while the load snaps back
-    (med,) = [r for r in S.WHOLE_WIDTH if r["resolution"] == "medium" and r["l0"] == 4.75]
-    band475 = S.MEASURED["medium_path_following_l0_4.75_2026_12_05"]
+    (med,) = [r for r in WHOLE_WIDTH if r["resolution"] == "medium" and r["l0"] == 4.75]
+    band475 = MEASURED["medium_path_following_l0_4.75_2026_12_05"]
     assert med["first_loading_peak_force"] == pytest.approx(band475["first_loading_peak_force"], rel=0.01)
     track = med["crack_track"]
     assert all(t1[4] <= t0[4] for t0, t1 in zip(track, track[1:])) and max(t[1] for t in track) < 6.3

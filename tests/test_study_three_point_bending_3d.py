@@ -1,6 +1,6 @@
 """The 3D study (studies/three_point_bending_3d.py): its meshes, its parameters, and the adjoint in 3D.
 
-The slab against its 2D twin at quick resolution is recorded in the study's MEASURED (minutes of
+The slab against its 2D twin at quick resolution is recorded in the study's records (minutes of
 3D runs); the exact agreement of a plane-strain slab with 2D is tests/test_extrude.py."""
 import dataclasses
 import math
@@ -172,7 +172,7 @@ def test_slab_with_the_indenter_follows_its_2d_twin_into_contact():
     measure is ill-conditioned where the force is still small: -0.51 % where it is a tenth of its
     final value). Measured: the slab is softer by 0.03-0.15 % from a quarter of the final force on,
     growing as the void is squeezed; at most 0.15 % of the final force. (At the quick run's peak,
-    after the crack: -0.02 %, the study's MEASURED.)"""
+    after the crack: -0.02 %, the study's record quick_slab.)"""
     _, p = study_parameters(study, "quick", {"parts": "slab", "h_band": 0.06, "h_void": 0.08, "h_indenter": 0.2,
                                              "h_beam": 0.5, "slab_thickness": 0.06, "stop_load": 0.07,
                                              "scheme": "single-pass"})

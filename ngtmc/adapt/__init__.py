@@ -10,9 +10,9 @@ from ngtmc.adapt.record import RefinementRecord
 from ngtmc.adapt.settings import CORRIDOR_L0, HISTORY_TRANSFERS, Adaptivity, check_solver, private_scene
 from ngtmc.scene import centroids, coordinates
 
-from ngtmc.adapt.corridor import corridor, corridor_due, strip
+from ngtmc.adapt.corridor import corridor_due, corridor_elements, strip
 from ngtmc.adapt.remesh import Remesher, move, remesh_step
 
 __all__ = ["Adaptivity", "CORRIDOR_L0", "HISTORY_TRANSFERS", "mark", "targets", "refine", "replay", "transfer_history",
            "RefinementRecord", "private_scene", "check_solver", "centroids", "coordinates"]
-__all__ += ['Remesher', 'corridor', 'corridor_due', 'move', 'remesh_step', 'strip']
+__all__ += ['Remesher', 'corridor_due', 'corridor_elements', 'move', 'remesh_step', 'strip']

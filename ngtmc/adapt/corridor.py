@@ -21,7 +21,7 @@ from ngtmc.scene import centroids, coordinates
 from ngtmc.model import deformation_gradient
 from ngtmc.scene import element_vertices
 
-__all__ = ["corridor", "corridor_due", "strip", "Strip", "CORRIDOR_DROP"]
+__all__ = ["corridor_elements", "corridor_due", "strip", "Strip", "CORRIDOR_DROP"]
 
 
 #: the crack runs (:func:`corridor`) once the force has fallen below this fraction of its peak
@@ -90,7 +90,7 @@ def strip(solver, adapt: Adaptivity, marked: np.ndarray) -> Strip | None:
     return Strip(tip, d, w)
 
 
-def corridor(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None, line: Strip | None = None) -> np.ndarray:
+def corridor_elements(solver, adapt: Adaptivity, marked: np.ndarray, remesher=None, line: Strip | None = None) -> np.ndarray:
     """Elements to refine besides ``marked`` (:func:`ngtmc.adapt.mark`) where the crack runs: those
     of the fracture regions, still coarser than their target and not marked, in the :func:`strip`
     ``line`` (default: the strip of ``marked``) (boolean over the elements). By bisection

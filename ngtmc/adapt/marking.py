@@ -2,10 +2,8 @@
 :class:`~ngtmc.adapt.settings.Adaptivity` on a solver's state, at its history points."""
 from __future__ import annotations
 
-import re
 
 import numpy as np
-import ngsolve as ngs
 
 from ngtmc.adapt.settings import Adaptivity
 from ngtmc.scene import neighbours, within
@@ -31,14 +29,9 @@ def at_points(solver, cf) -> np.ndarray:
 
 
 def element_regions(solver) -> tuple[np.ndarray, np.ndarray]:
-    """Boolean masks over the elements: in a fracture region, in the void (rho < 1/2)."""
-    mesh = solver.mesh
-    mats = mesh.GetMaterials()
-    frac_ids = [i for i, m in enumerate(mats) if solver._frac_re and re.fullmatch(solver._frac_re, m)]
-    idx = np.array([el.index for el in mesh.Elements(ngs.VOL)])
-    frac = np.isin(idx, frac_ids)
-    void = solver.rho.vec.FV().NumPy() < 0.5
-    return frac, void
+    """Boolean masks over the elements: in a fracture region (the solver's
+    :class:`~ngtmc.scene.regions.Regions`), in the void (rho < 1/2)."""
+    return solver.regions.fracture, solver.rho.vec.FV().NumPy() < 0.5
 
 
 def targets(solver, adapt: Adaptivity) -> np.ndarray:

@@ -140,7 +140,7 @@ class CoupledNewton:
         # scale of the alpha residual: (Gc / l0) times the lumped mass, for alpha of order one
         b = s.fes_a.TestFunction()
         lump = ngs.LinearForm(s.fes_a)
-        lump += s.Gc / s.l0 * b * ngs.dx(definedon=s.mesh.Materials(s._frac_re))
+        lump += s.Gc / s.l0 * b * ngs.dx(definedon=s.mesh.Materials(s.regions.fracture_regex))
         lump.Assemble()
         if s.ranks.parallel:
             lump.vec.Cumulate()

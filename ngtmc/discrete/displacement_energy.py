@@ -67,11 +67,11 @@ class DisplacementEnergy:
             g = fracture.degradation(self.alpha if alpha is None else alpha, sc.residual_stiffness)
             if sc.formulation == "anisotropic":
                 plus, minus = splits.split_energy(sc.split, F, self.K, self.G)
-                terms.append(("elastic_plus", g * plus, self._frac_re))
-                terms.append(("elastic_minus", minus, self._frac_re))
+                terms.append(("elastic_plus", g * plus, self.regions.fracture_regex))
+                terms.append(("elastic_minus", minus, self.regions.fracture_regex))
             else:
-                terms.append(("elastic_vol", g * psi_vol(F, self.K), self._frac_re))
-                terms.append(("elastic_dev", g * psi_dev(F, self.G), self._frac_re))
+                terms.append(("elastic_vol", g * psi_vol(F, self.K), self.regions.fracture_regex))
+                terms.append(("elastic_dev", g * psi_dev(F, self.G), self.regions.fracture_regex))
         vol, dev = psi_vol(F, self.K), psi_dev(F, self.G)  # one object each: compiled once (_maybe_compile)
         for others in (self._high_re, self._low_re):
             if others:

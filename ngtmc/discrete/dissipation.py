@@ -69,7 +69,7 @@ class Dissipation:
     def fracture_mean(self, cf) -> float:
         """Mean of the coefficient ``cf`` over the fracture regions (area or volume weighted)."""
         s = self.s
-        frac = s.mesh.Materials(s._frac_re)
+        frac = s.mesh.Materials(s.regions.fracture_regex)
         area = ngs.Integrate(ngs.CoefficientFunction(1.0), s.mesh, definedon=frac)
         return float(ngs.Integrate(cf, s.mesh, definedon=frac)) / float(area)
 

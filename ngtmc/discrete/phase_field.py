@@ -27,8 +27,8 @@ class PhaseFieldHistory:
 
     def _build_phase_field(self):
         a_t, b_t = self.fes_a.TnT()
-        dxf = ngs.dx(definedon=self.mesh.Materials(self._frac_re))
-        dxHf = ngs.dx(definedon=self.mesh.Materials(self._frac_re), intrules=self.irs.GetIntegrationRules())
+        dxf = ngs.dx(definedon=self.mesh.Materials(self.regions.fracture_regex))
+        dxHf = ngs.dx(definedon=self.mesh.Materials(self.regions.fracture_regex), intrules=self.irs.GetIntegrationRules())
         self.a_alpha = bilinear_form(self.fes_a, symmetric=True)
         self.f_alpha = ngs.LinearForm(self.fes_a)
         bil, lin = fracture.alpha_driving_form(a_t, b_t, self.H, self.Gc, self.l0, dxHf, dxf)
@@ -106,7 +106,7 @@ class PhaseFieldHistory:
         if self.alpha is None:
             return 0.0
         dens = fracture.fracture_energy_density(self.alpha, self.Gc, self.l0)
-        return float(ngs.Integrate(dens, self.mesh, definedon=self.mesh.Materials(self._frac_re), order=2))
+        return float(ngs.Integrate(dens, self.mesh, definedon=self.mesh.Materials(self.regions.fracture_regex), order=2))
 
     def max_alpha(self) -> float:
         return self.ranks.max(self.alpha.vec.FV().NumPy()) if self.alpha is not None else 0.0
@@ -125,10 +125,10 @@ def history_pieces(s, u, a, b) -> list:
     pp = s.crack_driving_density(F)
     H_n = ngs.IfPos(pp - s.H, pp, s.H)
     dg = -2.0 * (1.0 - a)  # g'(alpha) of AT-2; the residual stiffness is a constant
-    dxH = ngs.dx(definedon=s.mesh.Materials(s._frac_re), intrules=s.irs.GetIntegrationRules())
+    dxH = ngs.dx(definedon=s.mesh.Materials(s.regions.fracture_regex), intrules=s.irs.GetIntegrationRules())
     if s.elastic_rule_is_history_rule():
         return [(dg * (H_n - s.degraded_density(F)) * b, dxH)]
-    return [(dg * H_n * b, dxH), (-dg * s.degraded_density(F) * b, s.energy_measure("elastic_vol", s._frac_re))]
+    return [(dg * H_n * b, dxH), (-dg * s.degraded_density(F) * b, s.energy_measure("elastic_vol", s.regions.fracture_regex))]
 
 
 def phase_field_piece(s, a, b) -> tuple:
@@ -136,4 +136,4 @@ def phase_field_piece(s, a, b) -> tuple:
     grad beta) over the fracture regions (Eq. 16), in N/mm^2 per unit alpha; exact for P1 with the
     rule of order 2."""
     cf = s.Gc / s.l0 * a * b + s.Gc * s.l0 * ngs.InnerProduct(ngs.Grad(a), ngs.Grad(b))
-    return cf, ngs.dx(definedon=s.mesh.Materials(s._frac_re), intrules=rules(s.mesh, 2))
+    return cf, ngs.dx(definedon=s.mesh.Materials(s.regions.fracture_regex), intrules=rules(s.mesh, 2))

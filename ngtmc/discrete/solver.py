@@ -33,7 +33,7 @@ from ngtmc.discrete.newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonO
 from ngtmc.scene import Ranks
 from ngtmc.discrete.spaces import lower_order_outside
 from ngtmc.scene import Point, Support, Traction
-from ngtmc.scene import matches, regex, region_names, vertices_of
+from ngtmc.scene import matches, regex, vertices_of
 from ngtmc.scene import Scene
 
 __all__ = ["Solver", "NewtonResult", "NewtonOptions", "TIMING_KEYS", "DISPLACEMENT_RTOL"]
@@ -95,6 +95,8 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         # a copy: the options object passed in comes back unchanged (atol is filled in below)
         self.newton = _newton_options(newton)
         self.mesh = mesh = scene.mesh
+        #: the scene's regions on the mesh (:class:`~ngtmc.scene.regions.Regions`), built again after a refinement
+        self.regions = scene.regions()
         #: reductions over MPI ranks (:mod:`ngtmc.scene.distributed`; the serial expressions on a serial mesh)
         self.ranks = Ranks(mesh)
         self.dim = d = mesh.dim
@@ -133,7 +135,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         self._free_dofs()
 
         self.rho = ngs.GridFunction(ngs.L2(mesh, order=0), name="density")
-        self.rho.vec.FV().NumPy()[:] = scene.element_density()
+        self.rho.vec.FV().NumPy()[:] = self.regions.density
 
         # loads: the Dirichlet values of each displacement load at a given lambda, their reaction
         # weights d u_D / d lambda, and the external work of the tractions
@@ -142,8 +144,8 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         self._build_loads()
 
         # ------------------------------------------------------------ material fields
-        regions = mesh.GetMaterials()
-        mat_of = {r: scene.material_of(r) for r in regions}
+        regions = self.regions.names
+        mat_of = self.regions.materials
         # one ngsolve.Parameter per distinct Material, so that derivatives with respect to E, nu,
         # Gc and l0 can be formed symbolically (cf.Diff(parameter)) for sensitivities
         self.material_parameters = {}
@@ -167,18 +169,17 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         if self.newton.atol is None:
             self.newton.atol = 1e-12 * self.E_max * self.length_scale ** (d - 1)
 
-        frac = scene.fracture_region_names
+        frac = list(self.regions.fracture_names)
         self.fracture_regions = frac
-        self._frac_re = regex(frac)
         others = sorted(r for r in set(regions) if not any(matches(f, r) for f in frac))
         # regions whose elements carry the full order p (all of them unless the order varies)
         high = set(regions) if p >= 2 else set()
         if self._variable_order:
-            high = {r for r in regions if matches(regex(region_names(scene.regulariser.regions)), r)}
+            high = {r for r in regions if matches(self.regions.regulariser_regex, r)}
         self._high_re = regex(sorted(r for r in others if r in high))
         self._low_re = regex(sorted(r for r in others if r not in high))
         # the history lives at the order of the fracture regions' displacement
-        frac_high = bool(frac) and any(r in high for r in regions if matches(self._frac_re, r))
+        frac_high = bool(frac) and any(r in high for r in regions if matches(self.regions.fracture_regex, r))
         p_hist = p if (frac_high or not self._variable_order) else 1
 
         # ------------------------------------------------------------ history and phase field
@@ -194,7 +195,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         self.H_committed = np.zeros(self.irs.ndof)
         self._psi_plus_cf = None   # Psi_plus(u), compiled at its first use (psi_plus_values)
         if frac:
-            self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self._frac_re))
+            self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self.regions.fracture_regex))
             self.alpha = ngs.GridFunction(self.fes_a, name="alpha")
             self.alpha_committed = np.zeros(self.fes_a.ndof)
             self._build_phase_field()
@@ -238,7 +239,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         refined = self.mesh_generation > 0
         if refined:
             self.fes_u.Update()
-        lower_order_outside(self.fes_u, self.mesh, regex(region_names(self.scene.regulariser.regions)),
+        lower_order_outside(self.fes_u, self.mesh, self.regions.regulariser_regex,
                             order=self.order if refined else None)
         if refined:
             self.fes_u.Update()
@@ -257,7 +258,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
     def _mesh_data(self, loads: bool = True):
         """Everything besides the spaces and forms that depends on the mesh: element sizes, the
         loads' dofs and fields, work vectors, factorizations (dropped)."""
-        self.h = self.scene.element_sizes()
+        self.h = self.regions.sizes
         if loads:
             self._build_loads()
         self._inv = None
@@ -281,10 +282,11 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         and their committed copies, are the caller's to transfer (:mod:`ngtmc.adapt`); the
         committed arrays are resized here only when their length no longer fits (zeros)."""
         self.mesh_generation += 1
+        self.regions = self.scene.regions()
         self._apply_orders()
         self.u.Update()
         self._free_dofs()
-        self.rho.vec.FV().NumPy()[:] = self.scene.element_density()
+        self.rho.vec.FV().NumPy()[:] = self.regions.density
         self._mesh_data()
         if self.H_committed.size != self.irs.ndof:
             self.H_committed = np.zeros(self.irs.ndof)
@@ -314,7 +316,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFi
         mesh = self.mesh
         pts = np.asarray(mesh.ngmesh.Coordinates())[:mesh.nv]
         if self.alpha is not None:
-            pts = pts[sorted(vertices_of(mesh, self._frac_re))]
+            pts = pts[sorted(vertices_of(mesh, self.regions.fracture_regex))]
         return self._box(pts)
 
     def _box(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -44,7 +44,7 @@ class _Run(RunFolder):
         self.simulations: dict = {}             # case -> the Simulation that computed it in this process
         self.resume_from: dict[str, dict] = {}   # case -> checkpoint to continue from (see prepare_resume)
         #: case -> NGSolve threads for that case, each case then in its own TaskManager (threads="auto"
-        #: of a serial run: :func:`ngtmc.runner.case_threads`); None: the caller's setting for all
+        #: of a serial run: :func:`ngtmc.runner.study_run.case_threads`); None: the caller's setting for all
         self.case_threads = None
 
     # ------------------------------------------------------------ resume

@@ -21,7 +21,7 @@ import pandas as pd
 
 from ngtmc.study import CheckpointWarning, jsonable, write_atomic, write_json, write_npz
 from ngtmc.study import parameters_hash, physics_hash, run_description
-from ngtmc.simulation import HISTORY_COLUMNS, HISTORY_UNITS, force_unit, peak
+from ngtmc.simulation import HISTORY_COLUMNS, force_unit, peak
 from ngtmc.scene import region_names
 from ngtmc.runner.checkpoints import CheckpointStore
 from ngtmc.runner.snapshots import Snapshots
@@ -109,7 +109,7 @@ class RunFolder:
         bad = [n for n in names if "@" in n or "__" in n or not n]
         if bad:   # snapshots.npz keys are {case}__{field}, and {case}@{g}__{field} for a refined mesh
             raise StudyError(f"study {mod.NAME!r}: case names {bad} may contain neither '@' nor '__' (and not be empty)")
-        self.force_unit: str | None = None      # of the first scene built (ngtmc.simulation.plugins.force_unit)
+        self.force_unit: str | None = None      # of the first scene built (ngtmc.simulation.history.force_unit)
         self.thickness: float | None = None
         self.features: dict = {}                # what the scenes have (fracture, void, regulariser), for the report
         #: hash of the physical parameters alone (PARAMETERS, not the resolution's mesh and step sizes):

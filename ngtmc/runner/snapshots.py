@@ -247,7 +247,7 @@ class Snapshots:
             import re
             s = self.solver
             # 1 in the fracture regions, 0 elsewhere (alpha is defined there only)
-            inside = s.mesh.MaterialCF({m: 1.0 for m in set(s.mesh.GetMaterials()) if re.fullmatch(s._frac_re, m)},
+            inside = s.mesh.MaterialCF({m: 1.0 for m in set(s.mesh.GetMaterials()) if re.fullmatch(s.regions.fracture_regex, m)},
                                        default=0.0) if s.alpha is not None else None
             self._section_grid = {"axis": axis, "at": float(at), "c1": c[0], "c2": c[1], "others": others,
                                   "fracture": inside}

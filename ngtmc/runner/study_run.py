@@ -14,14 +14,13 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ngtmc.runner.outputs import ReportOutput
-from ngtmc.study import (UNITS, effective_status, git_revision, jsonable, read_metadata, versions, write_atomic, write_json, write_npz)
-from ngtmc.study import parameter_table, resume_parameters, typed_overrides
+from ngtmc.study import effective_status, read_metadata
+from ngtmc.study import resume_parameters, typed_overrides
 from ngtmc.study import load_study
 from ngtmc.study import StudyError
 from ngtmc.study import study_parameters
 from ngtmc.runner.cases import _Run
 from ngtmc.runner.claim import FolderClaim
-from ngtmc.runner.folder import case_results
 from ngtmc.runner.parallel import ParallelCases, check_settings
 from ngtmc.scene import Scene
 from ngtmc.simulation import emit

@@ -111,7 +111,7 @@ class VtkWriter:
             self._lf_vm += _von_mises(sigma).Compile() * v * dx
             self._lf_area += v * dx
         if self.fracture:
-            dx_h = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=s.irs.GetIntegrationRules())
+            dx_h = ngs.dx(definedon=mesh.Materials(s.regions.fracture_regex), intrules=s.irs.GetIntegrationRules())
             self._psi_plus = ngs.GridFunction(s.irs)
             self._H = ngs.GridFunction(s.irs)
             self._lf_pp, self._lf_H, self._lf_area_h = (ngs.LinearForm(l2) for _ in range(3))

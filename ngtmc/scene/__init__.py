@@ -3,7 +3,7 @@
 gmsh import and distribution over MPI ranks."""
 from ngtmc.scene.conditions import DisplacementField, DisplacementLoad, Point, Support, Traction
 from ngtmc.scene.distributed import Ranks, check_supported, distribute, refuse_unsupported
-from ngtmc.scene.extrude import extrude
+from ngtmc.scene.extrusion import extrude
 from ngtmc.scene.gmsh import read_gmsh
 from ngtmc.scene.regions import (
     centroids, coordinates, element_vertices, matches, neighbours, regex, region_names, vertices_of,

@@ -4,13 +4,14 @@ specification splits and matches, and of the vertices a name covers; the scene, 
 solver and the runner use it."""
 from __future__ import annotations
 
+from dataclasses import dataclass
 import re
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 __all__ = ["region_names", "matches", "regex", "vertices_of", "box_diagonal", "element_vertices", "PRISM_EDGES",
-           "coordinates", "centroids", "neighbours", "within"]
+           "coordinates", "centroids", "neighbours", "within", "element_sizes", "Regions"]
 
 
 def region_names(spec) -> list[str]:
@@ -91,3 +92,45 @@ def within(mesh, flags: np.ndarray, distance: float) -> np.ndarray:
     c = centroids(mesh)
     d, _ = cKDTree(c[flags]).query(c, distance_upper_bound=distance)
     return flags | np.isfinite(d)
+
+
+def element_sizes(mesh) -> np.ndarray:
+    """Longest edge of every element, mm (array of length mesh.ne). A prism's quadrilateral faces
+    have no diagonal edge (:data:`PRISM_EDGES`)."""
+    pts = np.asarray(mesh.ngmesh.Coordinates())
+    nodes = element_vertices(mesh)
+    h = np.zeros(len(nodes))
+    k = nodes.shape[1]
+    pairs = PRISM_EDGES if k == 6 else [(i, j) for i in range(k) for j in range(i + 1, k)]
+    for i, j in pairs:
+        h = np.maximum(h, np.linalg.norm(pts[nodes[:, i]] - pts[nodes[:, j]], axis=1))
+    return h
+
+
+@dataclass(frozen=True, eq=False)
+class Regions:
+    """The regions of a scene on one mesh, built once per mesh (:meth:`ngtmc.Scene.regions`): what
+    the solver, the refinement and the outputs read instead of matching names again.
+
+    ``names``: the region name of each region number (``mesh.GetMaterials()``); ``index``: the
+    region number of every element; ``density``: the pseudo-density of every element
+    (dimensionless); ``materials``: region name -> :class:`~ngtmc.Material`; ``fracture_names``
+    and ``fracture_regex``: the regions that may break, as the scene names them and as one
+    pattern ("" where none may); ``fracture``: per element, in such a region;
+    ``regulariser_regex``: the regions the contact regulariser covers ("" without one);
+    ``sizes``: the longest edge of every element, mm."""
+
+    names: tuple
+    index: np.ndarray
+    density: np.ndarray
+    materials: dict
+    fracture_names: tuple
+    fracture_regex: str
+    fracture: np.ndarray
+    regulariser_regex: str
+    sizes: np.ndarray
+
+    def where(self, pattern: str) -> np.ndarray:
+        """Per element: its region's name matches ``pattern`` (False everywhere for "")."""
+        ids = [i for i, m in enumerate(self.names) if pattern and matches(pattern, m)]
+        return np.isin(self.index, ids)

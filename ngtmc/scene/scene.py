@@ -22,7 +22,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.scene.regions import PRISM_EDGES, element_vertices, matches, region_names
+from ngtmc.scene.regions import Regions, element_sizes, element_vertices, matches, regex, region_names
 from ngtmc.scene.warnings import ElementWarning, ResolutionWarning  # noqa: F401  (re-exported)
 from ngtmc.scene.conditions import DisplacementField, DisplacementLoad, Point, Support, Traction  # noqa: F401
 from ngtmc.model import Material, check_number
@@ -242,14 +242,20 @@ class Scene:
         return element_vertices(self.mesh)
 
     def element_sizes(self) -> np.ndarray:
-        """Longest edge of every element, mm (array of length mesh.ne). A prism's quadrilateral
-        faces have no diagonal edge: until 2026-12-05 their diagonals counted, and a slab of
-        prisms as thick as its triangles were wide measured up to 1.41 times its size."""
-        pts = np.asarray(self.mesh.ngmesh.Coordinates())
-        nodes = self.element_vertices()
-        h = np.zeros(len(nodes))
-        k = nodes.shape[1]
-        pairs = PRISM_EDGES if k == 6 else [(i, j) for i in range(k) for j in range(i + 1, k)]
-        for i, j in pairs:
-            h = np.maximum(h, np.linalg.norm(pts[nodes[:, i]] - pts[nodes[:, j]], axis=1))
-        return h
+        """Longest edge of every element, mm (array of length mesh.ne; :func:`ngtmc.scene.regions.element_sizes`)."""
+        return element_sizes(self.mesh)
+
+    def regions(self) -> Regions:
+        """The scene's regions on its mesh as it is now (:class:`~ngtmc.scene.regions.Regions`):
+        built again after each refinement of the mesh."""
+        mesh = self.mesh
+        names = tuple(mesh.GetMaterials())
+        index = np.array([el.index for el in mesh.Elements(ngs.VOL)], dtype=int)
+        frac = tuple(self.fracture_region_names)
+        frac_re = regex(frac)
+        materials = {r: self.material_of(r) for r in names}
+        reg_re = regex(region_names(self.regulariser.regions)) if self.regulariser is not None else ""
+        fracture = np.isin(index, [i for i, m in enumerate(names) if frac_re and matches(frac_re, m)])
+        return Regions(names=names, index=index, density=self.element_density(), materials=materials,
+                       fracture_names=frac, fracture_regex=frac_re, fracture=fracture, regulariser_regex=reg_re,
+                       sizes=element_sizes(mesh))

@@ -78,8 +78,8 @@ class _Engine:
             self.mu = ngs.GridFunction(s.fes_a)       # phase-field adjoint
             self.frac_ind = mesh.MaterialCF({r: 1.0 for r in set(mesh.GetMaterials())
                                              if any(re.fullmatch(f, r) for f in s.fracture_regions)}, default=0.0)
-            self.dx_Hf = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=s.irs.GetIntegrationRules())
-            self.dx_af = ngs.dx(definedon=mesh.Materials(s._frac_re), intrules=rules(mesh, 2))
+            self.dx_Hf = ngs.dx(definedon=mesh.Materials(s.regions.fracture_regex), intrules=s.irs.GetIntegrationRules())
+            self.dx_af = ngs.dx(definedon=mesh.Materials(s.regions.fracture_regex), intrules=rules(mesh, 2))
         self._build()
 
     # ---------------------------------------------------------------- forms

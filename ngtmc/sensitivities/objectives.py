@@ -191,7 +191,7 @@ class FinalFractureEnergy(Objective):
         cache = self.__dict__.setdefault("_cf", {})
         if id(s) not in cache:
             cache[id(s)] = (s, fracture.fracture_energy_density(s.alpha, s.Gc, s.l0))
-        return Seeds(cfs=[(cache[id(s)][1], s._frac_re, 1.0)])
+        return Seeds(cfs=[(cache[id(s)][1], s.regions.fracture_regex, 1.0)])
 
     def load_seeds(self, path):
         return np.zeros(path.n_steps + 1)

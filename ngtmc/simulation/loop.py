@@ -32,7 +32,7 @@ from ngtmc.simulation.records import RunRecords
 from ngtmc.simulation.refine import RunRefinement
 from ngtmc.simulation.state import RunState
 from ngtmc.stepping import AdaptiveStepControl, ControlState, Schedule
-from ngtmc.simulation.options import RUN_FOLDER_OPTIONS, check_options, simulation_keywords
+from ngtmc.simulation.options import check_options, simulation_keywords
 from ngtmc.adapt import Adaptivity, check_solver, private_scene
 from ngtmc.adapt import Remesher
 from ngtmc.model import check_number
@@ -222,7 +222,7 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
         self._wf_prev = 0.0
         self._elapsed_before = 0.0
         self._t_start = None
-        #: force unit of this scene's history (:func:`ngtmc.simulation.plugins.force_unit`)
+        #: force unit of this scene's history (:func:`ngtmc.simulation.history.force_unit`)
         self.force_unit = force_unit(scene.dim, scene.thickness)
         # a scene distributed over MPI ranks: every rank holds the same history; rank 0 reports it
         self._progress = Progress(progress if scene.mesh.comm.rank == 0 else False, "[ngtmc]", self.force_unit)

@@ -7,7 +7,7 @@ attributes ``solver``, ``adapt``, ``coupled``, ``_path``, ``_remesher``, ``rows`
 from __future__ import annotations
 from ngtmc.adapt import mark
 from ngtmc.adapt import refine
-from ngtmc.adapt import corridor, corridor_due, strip
+from ngtmc.adapt import corridor_due, corridor_elements, strip
 from ngtmc.adapt import remesh_step
 
 __all__ = ["RunRefinement"]
@@ -31,7 +31,7 @@ class RunRefinement:
             if self.adapt.corridor > 0 and marked.any() and corridor_due(self.rows, self.refinements):
                 line = strip(s, self.adapt, marked)
                 if line is not None:
-                    extra = corridor(s, self.adapt, marked, remesher=rm, line=line)
+                    extra = corridor_elements(s, self.adapt, marked, remesher=rm, line=line)
                     marked |= extra
                     clip = (extra, line.contains)
             if not marked.any():

@@ -77,7 +77,7 @@ ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_reme
 
 #: Settings whose default changed after runs were recorded, with the default those runs had: a
 #: resumed run whose record does not name the setting, or names it at that old default, goes on
-#: with it (:func:`ngtmc.study.run_files.resume_parameters`), not with the new default. amr_corridor:
+#: with it (:func:`ngtmc.study.parameters.resume_parameters`), not with the new default. amr_corridor:
 #: 0 (none) until 2026-12-06, "auto" (4 l0 in 2D) since.
 DEFAULT_CHANGED = {"amr_corridor": 0.0}
 
@@ -306,7 +306,7 @@ def run_description(mod, p: dict, resolution: str | None, overrides: dict | None
 def parameters_hash(p: dict, mod=None) -> str:
     """``"sha256:<hex>"`` of the resolved parameters ``p`` (physics, resolution and solver settings)
     of the study module ``mod`` in canonical JSON: equal for equal parameters, whatever their order
-    or their origin. Settings without effect in ``p`` (:func:`ngtmc.study.registry.effective_parameters`,
+    or their origin. Settings without effect in ``p`` (:func:`ngtmc.study.parameters.effective_parameters`,
     which needs ``mod`` for the settings a study added later) are left out."""
     text = json.dumps(jsonable(effective_parameters(p, mod)), sort_keys=True, separators=(",", ":"))
     return "sha256:" + hashlib.sha256(text.encode()).hexdigest()

@@ -12,7 +12,7 @@ the fields of :data:`FIELDS`:
 
 A record made from a run folder (:func:`record_from_run`) has the run's figures per case::
 
-    python -m ngtmc.study.records RUN_DIR KEY [--note TEXT]    # adds it to its study's file
+    python -m ngtmc.study.measured RUN_DIR KEY [--note TEXT]    # adds it to its study's file
 """
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def _read(path, study: str) -> dict:
         text = path.read_text()
     except (FileNotFoundError, NotADirectoryError):
         raise FileNotFoundError(f"no measured records of study {study!r}: {path} does not exist (records of a run "
-                                "are added with: python -m ngtmc.study.records RUN_DIR KEY)") from None
+                                "are added with: python -m ngtmc.study.measured RUN_DIR KEY)") from None
     try:
         data = json.loads(text)
     except ValueError as e:
@@ -200,8 +200,8 @@ def add_record(study: str, key: str, record: dict, path=None) -> Path:
 
 
 def main(argv=None) -> int:
-    """``python -m ngtmc.study.records RUN_DIR KEY [--note TEXT]``."""
-    ap = argparse.ArgumentParser(prog="python -m ngtmc.study.records",
+    """``python -m ngtmc.study.measured RUN_DIR KEY [--note TEXT]``."""
+    ap = argparse.ArgumentParser(prog="python -m ngtmc.study.measured",
                                  description="Add the record of a run folder to its study's record file "
                                              "(studies/records/<study>.json).")
     ap.add_argument("run_dir", help="the run folder (with metadata.json and history.csv)")
