@@ -228,7 +228,7 @@ def _history_rows(case: str, path) -> pd.DataFrame:
 def run_metadata(p: dict, resolution: str, overrides: dict | None, mesh: dict, cases: list[dict], results: dict,
                  wall_time_s: float) -> dict:
     """metadata.json of an optimisation run in the run-folder schema of ``ngtmc.study.run_files``: the
-    common description of a run (:func:`ngtmc.study.run_files.run_description`: schema version, versions,
+    common description of a run (:func:`ngtmc.study.parameters.run_description`: schema version, versions,
     units, every parameter with its unit, overrides, parameter hashes, process), then this run's
     mesh (elements, vertices, design elements), cases, results and wall time (s)."""
     S = _study()

@@ -6,38 +6,31 @@ The file name starts with an underscore: it is a helper, not a study.
 """
 from __future__ import annotations
 
+from ngtmc.study import records
 from ngtmc.studies._tpb_references import reference_peaks
 
-#: The paper's set-up (indenter, void, vol-dev-J split, flat notch): its elastic slope, N/mm per
-#: micrometre (benchmarks record three_point_bending-quick-20261202T175821Z); its peak is the study's
-#: MEASURED["quick_path_following"], which :func:`report_table` is given.
-DEFAULT_SLOPE = 0.846
+#: Record keys (``studies/records/three_point_bending.json``) of the variants beside the paper's set-up,
+#: in the table's order: quick resolution, path following (the study's default scheme), one NGSolve
+#: thread. Each record's figures: ``variant``, ``set`` (the ``--set`` overrides), ``peak_force``
+#: (N/mm), ``peak_load`` (its load-point displacement, mm: the window's with the window, with the
+#: 0.05 mm gap with the indenter), ``elastic_slope`` (N/mm per micrometre, ``elastic_slope``; None:
+#: not recorded) and ``measured_in``.
+VARIANT_KEYS = ("fidelity_loading_window", "fidelity_loading_window_split_spectral",
+                "fidelity_loading_window_indenter_exclusion_0_1", "fidelity_loading_window_support_exclusion_false",
+                "fidelity_loading_window_notch_shape_v", "fidelity_notch_apex_v_3_bisections",
+                "fidelity_notch_apex_flat_3_bisections", "fidelity_miehe_set_up", "fidelity_miehe_set_up_l0_0_06")
+#: The record of the paper's set-up's elastic slope (its peak is the study's record
+#: ``quick_path_following``, which :func:`report_table` is given).
+DEFAULT_SLOPE_KEY = "quick_default_elastic_slope"
 
-#: One row per variant beside the paper's set-up: (variant, ``--set`` overrides, peak force N/mm,
-#: its load-point displacement mm, elastic slope N/mm per micrometre (``elastic_slope``; None: not
-#: recorded), where it was measured). Quick resolution, path following (the study's default
-#: scheme), one NGSolve thread, 2026-11-25 to 2026-12-03. The window variants' displacement is the
-#: window's (no gap); the indenter's includes the 0.05 mm gap.
-VARIANTS = (
-    ("Ambati's set-up: 0.1 mm window on the beam top, no indenter, no void", "loading=window",
-     37.148, 0.04113, 0.936, "tests/test_tpb_fidelity.py (2026-11-25 and 2026-12-03)"),
-    ("window, spectral split (Ambati's history split)", "loading=window split=spectral",
-     37.301, 0.04058, 0.944, "benchmarks record quick-20261203T065948Z"),
-    ("window, no fracture in 0.2 x 0.1 mm under it", "loading=window indenter_exclusion=0.1",
-     37.232, 0.04086, 0.938, "benchmarks record quick-20261203T065949Z"),
-    ("window, fracture allowed in the support zones", "loading=window support_exclusion=false",
-     37.006, 0.04093, 0.934, "benchmarks record quick-20261203T070103Z"),
-    ("window, V-notch (same depth and mouth width, sharp tip)", "loading=window notch_shape=v",
-     41.062, 0.04562, None, "tests/test_tpb_fidelity.py (2026-12-03)"),
-    ("window, V-notch, elements within 2 l0 of the tip bisected 3 times", "python -m benchmarks.notch_apex",
-     38.308, 0.04198, None, "notch_apex-quick-20261202T162227Z"),
-    ("window, flat notch, elements within 2 l0 of the tip bisected 3 times", "python -m benchmarks.notch_apex",
-     36.663, 0.04042, None, "notch_apex-quick-20261202T165040Z"),
-    ("Miehe's set-up (MIEHE_SET_UP: Gc 0.5 N/mm, anisotropic spectral, 0.5 mm window), l0 = 0.03 mm",
-     "MIEHE_SET_UP", 36.919, 0.03817, 0.989, "benchmarks record quick-20261203T065228Z-1"),
-    ("Miehe's set-up, l0 = 0.06 mm", "MIEHE_SET_UP l0=0.06",
-     35.670, 0.03783, 0.983, "benchmarks record quick-20261203T065228Z"),
-)
+
+def variants() -> tuple:
+    """The recorded variants: (variant, ``--set`` overrides, peak force N/mm, its displacement mm,
+    elastic slope N/mm per micrometre or None, where it was measured), in the order of VARIANT_KEYS."""
+    runs = records("three_point_bending")
+    return tuple((f["variant"], f["set"], f["peak_force"], f["peak_load"], f["elastic_slope"], f["measured_in"])
+                 for f in (runs[k]["figures"] for k in VARIANT_KEYS))
+
 
 CONCLUSION = (
     "What moves the peak and the slope, measured (docs/fidelity.md). The split, fracture under the load and at "
@@ -59,10 +52,11 @@ def report_table(default: dict) -> dict:
     recorded quick run of the paper's set-up (``peak_force``, ``peak_load``), the first row."""
     peaks = reference_peaks()
     ambati, miehe = peaks["ambati"][0], peaks["miehe"][0]
+    slope = records("three_point_bending")[DEFAULT_SLOPE_KEY]["figures"]["elastic_slope"]
     first = ("the paper's set-up: indenter, void, vol-dev-J split, flat notch", "-", float(default["peak_force"]),
-             float(default["peak_load"]), DEFAULT_SLOPE, "MEASURED['quick_path_following']")
+             float(default["peak_load"]), slope, "MEASURED['quick_path_following']")
     rows = [[name, sets, peak, at, slope, 100.0 * (peak / ambati - 1.0), 100.0 * (peak / miehe - 1.0), where]
-            for name, sets, peak, at, slope, where in (first, *VARIANTS)]
+            for name, sets, peak, at, slope, where in (first, *variants())]
     return {"title": "Fidelity variants (recorded at quick, path following; not computed in this run)",
             "caption": CONCLUSION,
             "columns": [{"name": "variant"}, {"name": "--set"}, {"name": "peak", "unit": "N/mm"},

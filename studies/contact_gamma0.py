@@ -57,15 +57,22 @@ Euler-Bernoulli beam theory (plane strain, E' = E/(1 - nu^2)): each cantilever h
 k = E' t^3 / (4 L^3) = 0.2747 N/mm per mm. Before contact F = k u; after the tips touch the two
 beams act in parallel, F = k (2 u - gap) (0.1236 N/mm at u = 0.3). The classical FE solution
 follows this within about 1 %. The TMC curve with gamma0 = 1e-4 is dominated by the void (the
-lower beam is dragged along long before contact). Measured, force at 0.3 mm relative to the
-classical one, quick / medium: +34.7 / +34.6 % (1e-4), +12.1 / +12.0 % (1e-5), +1.46 / +1.41 %
-(1e-6), +0.06 / -0.37 % (1e-7); the classical force (0.12463 / 0.12452 N/mm) is within 0.8 % of
-beam theory. At ``paper`` (7986 elements, 32358 u dofs, 120 steps per case; 266 s for the five
-cases on one thread, 2026-11-25): +34.5 % (1e-4), +11.8 % (1e-5), +1.28 % (1e-6), -0.10 % (1e-7),
-classical 0.124467 N/mm (+0.68 % over beam theory); parasitic force at half the gap 0.0203,
-0.0103, 0.00245, 0.00030 N/mm, proportional to gamma0 down to 1e-6 as before. So the numbers are
-mesh-converged at quick to a few tenths of a per cent. Measured numbers: module constant ``MEASURED`` and the tests (penalty convergence:
-the tests' penalty sweep).
+lower beam is dragged along long before contact).
+
+Results (records: ``studies/records/contact_gamma0.json``, ``ngtmc.study.measured("contact_gamma0")``)
+-----------------------------------------------------------------------------------------------------
+TMC force at 0.3 mm relative to the classical one, and parasitic force at half the gap (N/mm):
+
+==========  ===========  ===========  ===========  ===========  =====================
+resolution  1e-4         1e-5         1e-6         1e-7         classical (N/mm)
+==========  ===========  ===========  ===========  ===========  =====================
+quick       +34.7 %      +12.1 %      +1.46 %      +0.06 %      0.12463 (+0.8 % [1])
+paper       +34.5 %      +11.8 %      +1.28 %      -0.10 %      0.124467 (+0.68 % [1])
+parasitic   0.0203       0.0103       0.00245      0.00030      (paper)
+==========  ===========  ===========  ===========  ===========  =====================
+
+[1] against beam theory. The numbers are mesh-converged at quick to a few tenths of a per cent
+(medium: record ``medium``); the penalty convergence is checked by the tests' penalty sweep.
 """
 from __future__ import annotations
 
@@ -121,21 +128,6 @@ RESOLUTION_PARAMETERS = {
 DEFAULT_RESOLUTION = "quick"
 
 SNAPSHOT_LOADS = [0.075, 0.15, 0.2, 0.3]
-
-#: Measured with ngtmc.run_study (shared, heavily loaded 2-core machine; wall times are inflated).
-#: parasitic = TMC force minus classical force at probe_load = 0.075 mm (N/mm); post = relative
-#: difference to the classical force at the final load 0.3 mm; classical reference on the same mesh.
-MEASURED = {
-    "quick": {"elements": 819, "ndof_u": 3400, "steps": 30, "classical_final_force": 0.124632,
-              "beam_theory_final_force": 0.12363, "wall_time_s": 30,
-              "parasitic": {1e-4: 0.02034, 1e-5: 0.01037, 1e-6: 0.002476, 1e-7: 0.000307},
-              "post": {1e-4: 0.3469, 1e-5: 0.1207, 1e-6: 0.0146, 1e-7: 0.0006}},
-    "medium": {"elements": 2469, "ndof_u": 10092, "steps": 60, "classical_final_force": 0.124516, "wall_time_s": 170,
-               "post": {1e-4: 0.3458, 1e-5: 0.1201, 1e-6: 0.0141, 1e-7: -0.0037}},
-    "paper": {"elements": 7986, "ndof_u": 32358, "steps": 120, "classical_final_force": 0.124467, "wall_time_s": 266,
-              "threads": 1, "parasitic": {1e-4: 0.02027, 1e-5: 0.010318, 1e-6: 0.002452, 1e-7: 0.000302},
-              "post": {1e-4: 0.3445, 1e-5: 0.1182, 1e-6: 0.0128, 1e-7: -0.0010}},
-}
 
 
 def case_name(gamma0: float) -> str:

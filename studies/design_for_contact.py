@@ -18,13 +18,14 @@ load. The problem
     maximise   W(rho) = sum_n (F_n + F_{n-1}) / 2 (lambda_n - lambda_{n-1})   (external work, N mm)
     subject to sum_e |e| rho_e <= v_f |pad|,   0 <= x_e <= 1,   rho = filter(x)
 
-is solved by sequential linear programming with an adaptive move limit (scipy's ``linprog``) on
-the design x, filtered by a density filter of radius ``filter_radius`` (linear hat weights).
-(SLSQP, tried first, jumps to designs so far from the current one that their crack makes Newton
-fail; a move limit that shrinks on rejection keeps every trial near an accepted design.) Every iteration runs the forward path (adaptive control with k_u = 0, i.e.
-constant steps du unless Newton cuts back) and one adjoint sweep for dW/drho. The external work is
-taken over the whole stroke (0 to ``final_load``), so it rewards both carrying load early (filler)
-and not breaking early (where the filler sits).
+is solved by sequential linear programming with an adaptive move limit (scipy's ``linprog``) on the
+design x, filtered by a density filter of radius ``filter_radius`` (linear hat weights). (SLSQP,
+tried first, jumps to designs so far from the current one that their crack makes Newton fail; a
+move limit that shrinks on rejection keeps every trial near an accepted design.) Every iteration
+runs the forward path (adaptive control with k_u = 0, i.e. constant steps du unless Newton cuts
+back) and one adjoint sweep for dW/drho. The external work is taken over the whole stroke (0 to
+``final_load``), so it rewards both carrying load early (filler) and not breaking early (where the
+filler sits).
 
 Geometry and parameters are chosen for this demonstration (not from the paper): E = 1000 MPa,
 nu = 0.3, Gc = 0.15 N/mm, l0 = 0.15 mm, gamma0 = 1e-4, residual stiffness 1e-4, Hessian
@@ -32,58 +33,38 @@ regulariser kbar_r = 1e-5 (L = 1 mm) in the pad, displacement order 2, fracture 
 
 Run
 ---
-``run(out_dir, resolution)`` (code in ``studies/_design_optimisation.py``) runs the optimisation and writes, beside the usual ``metadata.json``
-and ``history.csv`` (cases ``initial`` and ``final``: force against displacement of the initial and
-optimised designs), ``optimisation.csv`` (iteration, objective W, volume, wall time) and
-``designs.npz`` (element centroids, pad mask and rho of the pad at selected iterations). The study
-runner's ``cases(p)`` interface describes one forward load path per case and does not fit an
-optimisation loop, so ``cases(p)`` only returns the initial design (the runner can still run it as
-a plain study); the optimisation is ``run``.
+``run(out_dir, resolution)`` (``python studies/design_for_contact.py OUT [-r medium]``; code in
+``studies/_design_optimisation.py``) runs the optimisation and writes, beside ``metadata.json`` and
+``history.csv`` (cases ``initial`` and ``final``), ``optimisation.csv`` (iteration, W, volume, wall
+time) and ``designs.npz`` (centroids, pad mask and rho of the pad at selected iterations).
+``cases(p)`` returns the initial design only (a case is one forward load path, not a loop).
 
 Gradient check: ``ngtmc run design-for-contact --set gradient_check=4 [--workers 2]`` runs the
-initial design with its adjoint sweep and, per random direction d_j, the forward runs at
-x0 +- eps d_j as cases of one run (a Dask cluster computes them side by side,
-docs/parallel.md); ``results.gradient_check`` of ``metadata.json`` compares dW/dx . d_j with the
-central differences (relative differences 4e-9 and 2e-8 on the coarse mesh of the tests).
+initial design with its adjoint sweep and, per random direction d_j, the forward runs at x0 +- eps
+d_j as cases of one run (docs/parallel.md); ``results.gradient_check`` of ``metadata.json``
+compares dW/dx . d_j with central differences (4e-9 and 2e-8 on the coarse mesh of the tests).
 
-Result (quick: 561 elements, 93 pad elements, steps of 0.02 mm; medium: 985 elements, 94 pad
-elements, steps of 0.01 mm). Starting from a uniform filler density 0.0025 (half the volume bound;
-contact still closes over most of the pad), W rose from 0.621 to 0.730 N mm (+17.7 %, 6 iterations,
-3 rejected trials) at quick and from 0.508 to 0.615 N mm (+21 %, 15 iterations, 8 rejected trials;
-the last 8 iterations add < 0.3 %) at medium. The optimiser takes the filler away from the middle
-of the pad, above the notch, and piles it up at the ends of the pad (densities up to 0.03): the
-indenter then loads the beam off-centre from the start, the bending moment at the notch is smaller
-for the same force, and the beam carries more (peak 4.97 against 4.36 N/mm at medium) before the
-crack runs. The left end (over the pinned support) gets more filler than the right one: the
-problem is nearly symmetric and the supports break the tie. One iteration costs one forward run and
-one adjoint sweep (medium: 16.7 s and 7.5 s on average on a shared 2-core machine).
-
-At ``paper`` (2190 elements, 8970 u dofs, 1148 phase-field dofs, steps of 0.005 mm, 30
-iterations; ``python studies/design_for_contact.py -r paper``, 2026-11-25, one thread beside
-another job): W rose from 0.412 to 0.513 N mm (+24.6 %, 49 evaluations, 18 rejected trials; the
-last 20 iterations add 0.15 %), peak 3.94 -> 4.44 N/mm; 904 s in all, 12.6 s per forward run
-and 5.8 s per adjoint sweep on average.
+Results (records: ``studies/records/design_for_contact.json``)
+-------------------------------------------------------------
+From a uniform filler density 0.0025 (half the volume bound) W rises from 0.621 to 0.730 N mm
+(+17.7 %, 6 iterations) at quick, from 0.508 to 0.615 N mm (+21 %, 15 iterations; peak 4.36 ->
+4.97 N/mm) at medium and from 0.412 to 0.513 N mm (+24.6 %, 30 iterations; peak 3.94 -> 4.44
+N/mm) at paper. The optimiser takes the filler away from the middle of the pad, above the notch,
+and piles it up at the ends of the pad: the indenter then loads the beam off-centre, the bending
+moment at the notch is smaller for the same force, and the beam carries more before the crack runs.
 
 Adaptive refinement (``--set h_crack=...``)
 --------------------------------------------
 The adjoint needs one mesh for the whole path (it refuses a run whose mesh changed,
-:mod:`ngtmc.sensitivities`). So with ``h_crack`` > 0 the path is recorded on the final mesh of
-a refining run: the beam is meshed at ``h`` without the band around the notch, the initial design
-is run over the whole stroke with :class:`ngtmc.Adaptivity` (bisection to ``h_crack`` where alpha
-> 0.2 or H reaches Gc / (6 l0), :func:`refined_mesh`), and every case, the gradient check and the
-optimisation then run on that mesh, fixed. The design variables are the pad elements of that
-mesh. A design that moves the crack out of the refined zone meets coarser elements there.
-
-Measured at quick with ``h_crack`` = l0/4 = 0.0375 mm (2026-12-04, one thread beside another
-job): the refining run takes 36 s and ends with 11173 elements (561 with the band), 260 of them
-in the pad (93 with the band). It refines almost the whole beam (10448 of 10842 beam elements have edges of at most
-0.06 mm): this demonstration beam is damaged diffusely, not along one crack (on the band mesh,
-283 of 406 beam elements have alpha > 0.2 at the end of the stroke). The initial design peaks at
-4.711 N/mm at 0.16 mm against 4.961 N/mm on the band mesh (h_band = 0.1 mm = 0.67 l0, which
-overestimates the toughness by 1 + h / (2 l0) = 1.33). A two-iteration optimisation
-(``python studies/design_for_contact.py OUT --set h_crack=0.0375 --set iterations=2``) raised W
-from 0.592 to 0.686 N mm (+15.9 %) in 147 s (26 s per forward run and 11 s per adjoint sweep on
-average, 45096 u dofs).
+:mod:`ngtmc.sensitivities`). So with ``h_crack`` > 0 the path is recorded on the final mesh of a
+refining run: the beam is meshed at ``h`` without the band around the notch, the initial design is
+run over the whole stroke with :class:`ngtmc.Adaptivity` (bisection to ``h_crack`` where alpha >
+0.2 or H reaches Gc / (6 l0), :func:`refined_mesh`), and every case, the gradient check and the
+optimisation then run on that mesh, fixed. The design variables are the pad elements of that mesh.
+A design that moves the crack out of the refined zone meets coarser elements there. At quick with
+``h_crack`` = l0/4 = 0.0375 mm the refining run ends with 11173 elements (561 with the band) and
+refines almost the whole beam: this demonstration beam is damaged diffusely, not along one crack;
+two iterations raise W by 15.9 % (record ``quick_h_crack``).
 """
 from __future__ import annotations
 
@@ -179,9 +160,8 @@ def refined_mesh(p: dict) -> ngs.Mesh:
     marks on the same mesh give the same mesh in every process)."""
     key = tuple(sorted((k, repr(v)) for k, v in p.items()))
     if key not in _REFINED:
-        # no corridor (the default "auto" is 4 l0): measured at quick, h_crack = 0.0375 mm, it added
-        # 330 elements (11503 against 11173, +3 % for every later forward and adjoint run) and saved
-        # nothing in this run (52 s against 50 s), whose damage is diffuse
+        # no corridor (the default "auto" is 4 l0): on this diffusely damaged beam it adds elements to
+        # every later run and saves nothing (record quick_h_crack)
         adapt = ngtmc.Adaptivity(h_crack=float(p["h_crack"]), corridor=0.0)   # checks h_crack (finite, > 0)
         mesh = _generated_mesh(p, p["h"])
         sc = build_scene(p, mesh=mesh)

@@ -39,56 +39,26 @@ Constant steps (k_u = 0) take the fewest steps but overshoot the peak (the crack
 k_u = 1000 spends most of its steps in the crack-growth tail (MODEL.md: steps fall to
 1e-7..1e-5 mm).
 
-Measured (2026-11-22; one NGSolve thread, the other core busy; error of the peak force against
-the finest case of the same resolution)
+Results (single-pass; every case in ``studies/records/step_control.json``)
+--------------------------------------------------------------------------
+Peak force error against the finest case of the same resolution, and steps:
 
-quick (CI, to 0.105 mm):
+==================  ===============  ===============  ===============  ===============
+k_u, du_max         quick (4e-3)     medium           paper            steps (paper)
+==================  ===============  ===============  ===============  ===============
+0, 2e-3 mm          +8.2 % [1]       +27.0 %          +29.0 %          75
+50, 2e-3 mm         +7.9 % [1]       +15.0 %          +16.1 %          137
+1000, 2e-3 mm       reference [1]    +1.5 %           +1.6 %           574
+0, 5e-4 mm          -                +6.8 %           +7.6 %           300
+50, 5e-4 mm         -                +5.0 %           +5.4 %           377
+1000, 5e-4 mm       -                reference        reference        950
+==================  ===============  ===============  ===============  ===============
 
-=================  =====  ======  ========  ==================  ===========  =======
-case               steps  Newton  wall [s]  peak force [N/mm]   at [mm]      error
-=================  =====  ======  ========  ==================  ===========  =======
-k_u=0,    du 4e-3     27     104        35  43.91               0.1050       +8.2 %
-k_u=50,   du 4e-3     29     112        39  43.80               0.1047       +7.9 %
-k_u=1000, du 4e-3    243     631       225  40.59               0.1012       reference
-=================  =====  ======  ========  ==================  ===========  =======
-
-medium (three_point_bending quick mesh, to 0.15 mm, 4481 s for the six cases):
-
-=================  =====  ======  ========  ==================  ===========  =======
-case               steps  Newton  wall [s]  peak force [N/mm]   at [mm]      error
-=================  =====  ======  ========  ==================  ===========  =======
-k_u=0,    du 2e-3     75     254       259  48.11               0.1200       +27.0 %
-k_u=50,   du 2e-3    137     416       419  43.54               0.1072       +15.0 %
-k_u=1000, du 2e-3    581    1460      1304  38.43               0.0984       +1.5 %
-k_u=0,    du 5e-4    300     815       691  40.44               0.1035       +6.8 %
-k_u=50,   du 5e-4    377    1037       670  39.75               0.1008       +5.0 %
-k_u=1000, du 5e-4    961    2200      1128  37.87               0.0975       reference
-=================  =====  ======  ========  ==================  ===========  =======
-
-paper (three_point_bending medium mesh, 22054 u dofs, to 0.15 mm; 2026-11-25, ``ngtmc run step-control
--r paper --workers 2``: 1432 s for the six cases on two Dask workers of one thread each, with two
-other jobs on the 2 cores, so the case times are upper bounds; 2687 s of case time in all):
-
-=================  =====  ======  ========  ==================  ===========  =======
-case               steps  Newton  wall [s]  peak force [N/mm]   at [mm]      error
-=================  =====  ======  ========  ==================  ===========  =======
-k_u=0,    du 2e-3     75     265       139  48.86               0.1180       +29.0 %
-k_u=50,   du 2e-3    137     466       207  43.96               0.1062       +16.1 %
-k_u=1000, du 2e-3    574    1567       612  38.47               0.0965       +1.6 %
-k_u=0,    du 5e-4    300     868       341  40.75               0.1025       +7.6 %
-k_u=50,   du 5e-4    377    1083       480  39.93               0.0992       +5.4 %
-k_u=1000, du 5e-4    950    2264       908  37.88               0.0957       reference
-=================  =====  ======  ========  ==================  ===========  =======
-
-The same picture on the finer mesh, with the same step counts to within a few (75, 137, 300 and
-377 steps as at medium; k_u = 1000 takes 574 and 950). Even the finest single-pass case stays
-+3.2 % above the converged peak of the same mesh (path following: 36.711 N/mm at 0.0941 mm in
-109 steps and 774 Newton iterations, three_point_bending ``MEASURED["medium_path_following"]``):
-the lag that Eq. 20 bounds does not vanish at the paper's du_max = 5e-4 mm.
-
-k_u matters: with constant steps of 2e-3 mm the single-pass scheme overshoots the peak by 27 %
-(the crack lags the load), k_u = 50 by 15 %, k_u = 1000 by 1.5 % at 60 % of the reference's
-steps. Most of the k_u = 1000 steps are spent in the crack tail after the peak.
+[1] quick has one du_max, 4e-3 mm, and stops at 0.105 mm. k_u matters: with constant steps the
+single-pass scheme overshoots the peak (the crack lags the load), k_u = 1000 comes within 1.5 %
+at 60 % of the reference's steps, most of them in the crack tail after the peak. Even the finest
+case stays +3.2 % above the converged peak of the same mesh (path following, three_point_bending
+record ``medium_path_following``): the lag that Eq. 20 bounds does not vanish at du_max = 5e-4 mm.
 """
 from __future__ import annotations
 
@@ -157,8 +127,8 @@ def cases(p: dict) -> list:
         for ku in kus:
             case = tpb.make_case(q, name=case_name(ku, du), label=f"k_u = {ku:g} 1/N, du_max = {du:g} mm",
                                  k_u=ku, du_max=du, final_load=stop, snapshot_loads=[0.1, stop])
-            # a rough model of the recorded step counts (docstring tables), for the order in which a
-            # cluster starts the cases: steps ~ stop / du_max, k_u = 1000 about ten times more
+            # a rough model of the recorded step counts (studies/records/step_control.json), for the
+            # order in which a cluster starts the cases: steps ~ stop / du_max, k_u = 1000 about ten times more
             case.cost = stop / du * (1.0 + ku / 100.0)
             out.append(case)
     return out
