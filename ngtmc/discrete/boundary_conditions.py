@@ -259,3 +259,14 @@ class BoundaryConditions:
         """Work-conjugate displacement of every traction load, by name, mm: int t.u ds / |int t ds|."""
         uN = self.u.vec.FV().NumPy()
         return {r["name"]: float(np.dot(r["f"], uN)) / r["total"] for r in self._loads if "f" in r}
+
+    def equilibrium_scale(self, r, load: float) -> float:
+        """The force scale (N) of :func:`meets` for this solver's iterate, whose residual is ``r``
+        (an NGSolve vector), at the load ``load`` (mm): the norm of the reactions on the dofs that
+        the displacement loads move, or of the tractions applied at ``load`` (force control) where
+        that is larger. The supports' reactions are left out: a plane-strain slab's held u_z carry
+        reactions that its 2D twin has no dofs for, and the two would converge differently."""
+        scale = self.ranks.masked_norm(r, self._moved_np)
+        if self._tractions:
+            scale = max(scale, abs(load) * self.ranks.masked_norm(self._f_ext, self._free_np))
+        return scale

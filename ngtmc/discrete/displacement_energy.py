@@ -11,6 +11,7 @@ Units: mm, N, MPa (densities in MPa, energies in N mm for the scene thickness in
 from __future__ import annotations
 
 import functools
+import math
 
 import ngsolve as ngs
 
@@ -19,6 +20,7 @@ from ngtmc.model import fracture
 from ngtmc.model import splits
 from ngtmc.discrete.spaces import bilinear_form, real_compile, term_rules
 from ngtmc.discrete.energy_forms import QuadraticPlus, merged_terms
+from ngtmc.discrete.newton import DisplacementNewton, DisplacementProblem, NewtonResult
 from ngtmc.model import deformation_gradient, psi_dev, psi_vol
 from ngtmc.scene import regex, region_names
 
@@ -191,3 +193,61 @@ class DisplacementEnergy:
         out["fracture_energy"] = wf * t
         out["dissipated_energy"] = wf * t / fracture.C_W
         return out
+
+    def _inverse(self, kind: str) -> str:
+        """The sparse direct solver to pass as ``inverse=``: ``kind``, or on a mesh distributed over
+        MPI ranks NGSolve's "masterinverse" (the matrix gathered and factorized on rank 0)."""
+        return "masterinverse" if self.ranks.parallel else kind
+
+    def _factorize(self, a):
+        if a is self.a_u:
+            if self._inv is None or self.ranks.parallel:  # NGSolve's masterinverse has no Update
+                self._inv = a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
+            else:
+                self._inv.Update()
+            return self._inv
+        return a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
+
+    def _energy(self, vec) -> float:
+        try:
+            e = self.a_u.Energy(vec)
+        except Exception:  # pragma: no cover - NGSolve raises on some invalid states
+            e = math.nan
+        # a distributed mesh: each rank's part (the form is a plain BilinearForm there), summed
+        return self.ranks.sum(e)
+
+    def _shift_form(self):
+        if self._a_shift is None:
+            self._mu = ngs.Parameter(0.0)
+            self._u_anchor = ngs.GridFunction(self.fes_u)
+            uT = self.fes_u.TrialFunction()
+            extra = 0.5 * self._mu * ngs.InnerProduct(uT - self._u_anchor, uT - self._u_anchor) * ngs.dx
+            self._a_shift = self._energy_form(uT, extra=extra)
+        return self._a_shift
+
+    def displacement_problem(self) -> DisplacementProblem:
+        """The problem the displacement Newton is handed (:class:`~ngtmc.discrete.newton.DisplacementProblem`):
+        this solver's energy form, displacement, free and Dirichlet dofs, boundary values,
+        tolerance scale, J > 0 guard, factorization, Levenberg shift and work vectors."""
+        return DisplacementProblem(
+            form=self.a_u, u=self.u, free=self._free_np, fixed=self._dir_np, target=self.dirichlet_target,
+            scale=self.equilibrium_scale, energy=self._energy, admissible=lambda: self.min_J() > 0.0,
+            factorize=self._factorize, shifted=lambda: (self._shift_form(), self._mu, self._u_anchor),
+            mu0=lambda: 1e-4 * self.E_max / self.ranks.min(self.h) ** 2, ranks=self.ranks,
+            vectors=(self._r, self._du, self._w, self._tmp, self._u0), timings=self.timings)
+
+    def solve_displacement(self, load: float) -> NewtonResult:
+        """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed
+        (:meth:`ngtmc.discrete.newton.DisplacementNewton.solve`, which says how). On success the
+        solver's load is ``load``; an acceptance at the residual floor is counted in
+        ``floor_accepts``. On failure u is left at the last iterate; the caller restores the state."""
+        self._r_valid = False
+        self._lam_ext = load       # the tractions' work at this load
+        newton = DisplacementNewton(self.newton, self.displacement_rtol, self.floor_rtol)
+        res = newton.solve(self.displacement_problem(), load)
+        self.energy_noise_switches += res.noise_switches
+        if res.converged:
+            self.load = load
+            self._r_valid = not res.floor       # the work vector r holds the residual of u
+            self.floor_accepts += int(res.floor)
+        return res

@@ -3,8 +3,12 @@ with alpha fixed (step 2 of the paper's scheme), with an energy line search, a g
 J <= 0, the Dirichlet increment carried by the Newton increment, and a shifted (Levenberg)
 tangent where the tangent is indefinite (a squeezed void).
 
-:class:`DisplacementNewton` is a base of :class:`ngtmc.discrete.solver.Solver`, on whose fields, forms and
-boundary conditions it works. The coupled Newton on (u, alpha) of the monolithic schemes is
+:class:`DisplacementNewton` is handed its problem (:class:`DisplacementProblem`: the energy form,
+the unknown, its free and Dirichlet dofs, the boundary values at a load, the force scale of the
+tolerance, the admissibility guard, the factorization and the Levenberg shift), as NGSolve's
+``NewtonSolver(a, u, freedofs)`` or felupe's ``newtonraphson(x0, fun, jac)`` are; the
+:class:`ngtmc.discrete.solver.Solver` builds that problem from its fields
+(``Solver.displacement_problem``). The coupled Newton on (u, alpha) of the monolithic schemes is
 :mod:`ngtmc.coupled.monolithic`.
 
 Units: mm, N, MPa (residuals in N, for the scene thickness in 2D).
@@ -12,13 +16,13 @@ Units: mm, N, MPa (residuals in N, for the scene thickness in 2D).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Callable
 import math
 import time
 
 import numpy as np
-import ngsolve as ngs
 
-__all__ = ["DisplacementNewton", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
+__all__ = ["DisplacementNewton", "DisplacementProblem", "energy_noise", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
            "meets", "lifted_direction"]
 
 #: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
@@ -27,7 +31,7 @@ DISPLACEMENT_RTOL = 1e-8
 #: Relative residual at which an iterate is accepted when the Newton direction no longer reduces
 #: the residual (line search failed or the iteration stalled), instead of the solver's rtol
 #: (1e-8): the default of ``NewtonOptions.floor_rtol`` (None refuses such iterates: the attempt
-#: fails and the step is cut back). Relative to :meth:`DisplacementNewton.equilibrium_scale`, the
+#: fails and the step is cut back). Relative to :meth:`ngtmc.Solver.equilibrium_scale`, the
 #: reaction of the iterate itself, never a residual of the step, so that a large step cannot loosen it.
 #: Why a floor at all: deep in the crack run of the paper three-point bending the correction is
 #: dominated by a near-singular mode, the horizontal motion of a vertex of the void layer squeezed
@@ -61,7 +65,7 @@ class NewtonOptions:
 
     The tolerance an accepted state meets: residual norm on the free dofs (N) <= rtol x
     (the iterate's reaction norm, or the applied tractions' where larger:
-    :meth:`DisplacementNewton.equilibrium_scale`) + atol, with floor_rtol in place of rtol in the steps whose
+    :meth:`ngtmc.Solver.equilibrium_scale`) + atol, with floor_rtol in place of rtol in the steps whose
     ``floor_accepts`` is not 0. The history column ``residual`` records it for every step.
     """
 
@@ -98,6 +102,10 @@ class NewtonResult:
     assembly_time: float
     shifted: int = 0
     message: str = ""
+    #: converged at the residual floor (``floor_rtol``), not at rtol
+    floor: bool = False
+    #: line searches whose energy could not resolve the step (round-off), so that the residual decided
+    noise_switches: int = 0
 
 
 def residual_split(r, u, target: np.ndarray, free: np.ndarray, dirichlet: np.ndarray, load: float, ranks=None):
@@ -119,7 +127,7 @@ def residual_split(r, u, target: np.ndarray, free: np.ndarray, dirichlet: np.nda
 def meets(res: float, scale: float, rtol: float, atol: float) -> bool:
     """True where the residual norm ``res`` (N) meets ``rtol`` x ``scale`` + ``atol``. The scale is
     the iterate's own: the norm of its reaction on the dofs the displacement loads move, or of the
-    applied tractions where that is larger (:meth:`DisplacementNewton.equilibrium_scale`; the
+    applied tractions where that is larger (:meth:`ngtmc.Solver.equilibrium_scale`; the
     coupled Newton and the classical-contact solver take the same norm of their residual), never
     a residual of the step, which grows with the step (a rigid rotation by 90 degrees in one step
     was accepted with a force of 1.2e-7 N and a body 4e-7 mm off the rotation). The one owner of
@@ -157,71 +165,65 @@ NOISE_STEP = 1e-2
 NOISE_FRACTION = 1e-2
 
 
+def energy_noise(energy: Callable, u, u0, du, E0: float) -> float:
+    """Round-off of the stored energy ``energy(vec)`` (N mm) at ``u0`` along ``du``: |E(u0 + e du) +
+    E(u0 - e du) - 2 E0| with e = NOISE_STEP (see NOISE_FRACTION); inf where either energy is not
+    finite. Leaves the vector ``u`` at u0 - e du."""
+    total = -2.0 * E0
+    for e in (NOISE_STEP, -NOISE_STEP):
+        u.data = u0 + e * du
+        total += energy(u)
+    return abs(total) if math.isfinite(total) else math.inf
+
+
+@dataclass
+class DisplacementProblem:
+    """What the displacement Newton is handed for one solve (units: mm, N).
+
+    ``form``: the energy form of u (``Apply`` gives the residual, ``AssembleLinearization`` the
+    tangent); ``u``: the unknown (a GridFunction, updated in place); ``free``, ``fixed``: its free
+    and Dirichlet dofs (boolean arrays); ``target(load)``: the Dirichlet values at the imposed
+    displacement ``load`` (a dof array, mm); ``scale(r, load)``: the force scale of the tolerance
+    (:func:`meets`) of an iterate whose residual is ``r`` (N); ``energy(vec)``: the stored energy
+    (N mm, summed over MPI ranks); ``admissible()``: the guard of a trial state besides a finite
+    energy (J > 0 at the history points); ``factorize(form)``: a factorization of a form's matrix on
+    the free dofs; ``shifted()``: the Levenberg form with its shift parameter and anchor
+    (``(form, mu, anchor)``: the tangent plus mu M about the anchor); ``mu0()``: the first shift
+    (MPa/mm^2); ``ranks``: the reductions over MPI ranks; ``vectors``: work vectors (r, du, w, tmp,
+    u0), r holding the last residual; ``timings``: seconds per part, added to."""
+
+    form: Any
+    u: Any
+    free: np.ndarray
+    fixed: np.ndarray
+    target: Callable[[float], np.ndarray]
+    scale: Callable[[Any, float], float]
+    energy: Callable[[Any], float]
+    admissible: Callable[[], bool]
+    factorize: Callable[[Any], Any]
+    shifted: Callable[[], tuple]
+    mu0: Callable[[], float]
+    ranks: Any
+    vectors: tuple
+    timings: dict
+
+
 class DisplacementNewton:
-    """Newton for the displacement at a fixed phase field (a base of :class:`ngtmc.discrete.solver.Solver`)."""
+    """Newton for the displacement at a fixed phase field, with an energy line search (see
+    :meth:`solve`). ``options``: :class:`NewtonOptions`; ``rtol``: the relative residual of
+    convergence; ``floor``: the relative residual at which an iterate that no longer improves is
+    accepted (``floor_rtol``; None: never)."""
 
-    def _inverse(self, kind: str) -> str:
-        """The sparse direct solver to pass as ``inverse=``: ``kind``, or on a mesh distributed over
-        MPI ranks NGSolve's "masterinverse" (the matrix gathered and factorized on rank 0)."""
-        return "masterinverse" if self.ranks.parallel else kind
+    def __init__(self, options: NewtonOptions, rtol: float, floor: float | None):
+        self.options = options
+        self.rtol = rtol
+        self.floor = floor
 
-    def equilibrium_scale(self, r, load: float) -> float:
-        """The force scale (N) of :func:`meets` for this solver's iterate, whose residual is ``r``
-        (an NGSolve vector), at the load ``load`` (mm): the norm of the reactions on the dofs that
-        the displacement loads move, or of the tractions applied at ``load`` (force control) where
-        that is larger. The supports' reactions are left out: a plane-strain slab's held u_z carry
-        reactions that its 2D twin has no dofs for, and the two would converge differently."""
-        scale = self.ranks.masked_norm(r, self._moved_np)
-        if self._tractions:
-            scale = max(scale, abs(load) * self.ranks.masked_norm(self._f_ext, self._free_np))
-        return scale
-
-    @property
-    def _ranks_or_none(self):
-        return self.ranks if self.ranks.parallel else None
-
-    def _factorize(self, a):
-        if a is self.a_u:
-            if self._inv is None or self.ranks.parallel:  # NGSolve's masterinverse has no Update
-                self._inv = a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
-            else:
-                self._inv.Update()
-            return self._inv
-        return a.mat.Inverse(self.free, inverse=self._inverse(self.newton.linear_solver))
-
-    def _energy(self, vec) -> float:
-        try:
-            e = self.a_u.Energy(vec)
-        except Exception:  # pragma: no cover - NGSolve raises on some invalid states
-            e = math.nan
-        # a distributed mesh: each rank's part (the form is a plain BilinearForm there), summed
-        return self.ranks.sum(e)
-
-    def _energy_noise(self, u0, du, E0: float) -> float:
-        """Round-off of the stored energy at ``u0`` along ``du``, N mm: |E(u0 + e du) + E(u0 - e du)
-        - 2 E0| with e = NOISE_STEP (see NOISE_FRACTION); inf where either energy is not finite.
-        Leaves ``self.u`` at u0 - e du."""
-        u = self.u.vec
-        total = -2.0 * E0
-        for e in (NOISE_STEP, -NOISE_STEP):
-            u.data = u0 + e * du
-            total += self._energy(u)
-        return abs(total) if math.isfinite(total) else math.inf
-
-    def _shift_form(self):
-        if self._a_shift is None:
-            self._mu = ngs.Parameter(0.0)
-            self._u_anchor = ngs.GridFunction(self.fes_u)
-            uT = self.fes_u.TrialFunction()
-            extra = 0.5 * self._mu * ngs.InnerProduct(uT - self._u_anchor, uT - self._u_anchor) * ngs.dx
-            self._a_shift = self._energy_form(uT, extra=extra)
-        return self._a_shift
-
-    def solve_displacement(self, load: float) -> NewtonResult:
-        """Newton solve for u at the imposed displacement ``load`` (mm) with alpha fixed.
+    def solve(self, p: DisplacementProblem, load: float) -> NewtonResult:
+        """Newton solve of ``p`` for u at the imposed displacement ``load`` (mm) with alpha fixed.
 
         Converged where the residual on the free dofs meets rtol (``displacement_rtol``) times
-        the iterate's own force scale (:meth:`equilibrium_scale`: its reaction, or the applied
+        the iterate's own force scale (``p.scale``, :meth:`ngtmc.Solver.equilibrium_scale`: its reaction, or the applied
         tractions) plus atol (:func:`meets`); no residual of the step (a first iterate's, a predictor's) enters
         the tolerance, so that a large step cannot loosen it.
 
@@ -234,34 +236,31 @@ class DisplacementNewton:
         the mass matrix, mu raised by tenfold until the direction descends. Where the residual
         stops falling (by less than half in an iteration, also the last one) or the line search
         fails, the iterate is accepted if its residual is below ``floor_rtol``
-        (``NewtonOptions.floor_rtol``; None: never) of the same scale (counted in
-        ``floor_accepts``). On failure u is left at the last iterate; the caller restores the
-        state."""
-        opt = self.newton
-        rtol = self.displacement_rtol
-        u = self.u.vec
-        r, du, w, tmp, u0 = self._r, self._du, self._w, self._tmp, self._u0
-        self._r_valid = False
-        target = self.dirichlet_target(load)
-        self._lam_ext = load
+        (``NewtonOptions.floor_rtol``; None: never) of the same scale (the result's ``floor``).
+        On failure u is left at the last iterate; the caller restores the state."""
+        opt = self.options
+        rtol = self.rtol
+        u = p.u.vec
+        r, du, w, tmp, u0 = p.vectors
+        ranks = p.ranks if p.ranks.parallel else None
+        target = p.target(load)
         solve_time = 0.0
         assembly_time = 0.0
         shifted = 0
         res = math.inf
         reac = 0.0
         res_prev = math.inf
-        tm = self.timings
-        floor = self.floor_rtol
+        tm = p.timings
+        floor = self.floor
         lifted = True
+        noise_switches = 0
 
         def at_floor(it):
             """The residual no longer falls: the iterate accepted if it is below the floor, else None."""
-            if not floor or lifted or not meets(res, self.equilibrium_scale(r, load), floor, opt.atol):
+            if not floor or lifted or not meets(res, p.scale(r, load), floor, opt.atol):
                 return None
-            self.floor_accepts += 1
-            self.load = load
-            self._r_valid = False
-            return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
+            return NewtonResult(True, it, res, solve_time, assembly_time, shifted, floor=True,
+                                noise_switches=noise_switches)
 
         def settled(it):
             """After the residual of the iterate of ``it`` iterations: the result if it converged,
@@ -270,43 +269,43 @@ class DisplacementNewton:
             nonlocal res_prev
             if lifted:
                 return None
-            if meets(res, self.equilibrium_scale(r, load), rtol, opt.atol):
-                self.load = load
-                self._r_valid = True
-                return NewtonResult(True, it, res, solve_time, assembly_time, shifted)
+            if meets(res, p.scale(r, load), rtol, opt.atol):
+                return NewtonResult(True, it, res, solve_time, assembly_time, shifted, noise_switches=noise_switches)
             done = at_floor(it) if res > 0.5 * res_prev else None
             res_prev = res
             return done
 
         for it in range(1, opt.max_iterations + 1):
             t0 = time.perf_counter()
-            self.a_u.Apply(u, r)
+            p.form.Apply(u, r)
             tm["residual"] += time.perf_counter() - t0
-            rem, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
+            rem, lifted, res, reac = residual_split(r, u, target, p.free, p.fixed, load, ranks)
             if not np.isfinite(res):
-                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite")
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "residual is not finite",
+                                    noise_switches=noise_switches)
             if _DEBUG:
-                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} tol {rtol * self.equilibrium_scale(r, load) + opt.atol:.3e}")
+                print(f"  it {it} res {res:.3e} reac {reac:.3e} lifted {lifted} tol {rtol * p.scale(r, load) + opt.atol:.3e}")
             done = settled(it - 1)
             if done is not None:
                 return done
             t0 = time.perf_counter()
-            self.a_u.AssembleLinearization(u)
+            p.form.AssembleLinearization(u)
             assembly_time += time.perf_counter() - t0
             tm["assembly"] += time.perf_counter() - t0
             t0 = time.perf_counter()
-            inv = self._factorize(self.a_u)
+            inv = p.factorize(p.form)
             t1 = time.perf_counter()
-            lifted_direction(self.a_u.mat, inv, r, rem, self._dir_np, w, tmp, du)
+            lifted_direction(p.form.mat, inv, r, rem, p.fixed, w, tmp, du)
             t2 = time.perf_counter()
             solve_time += t2 - t0
             tm["factorization"] += t1 - t0
             tm["solve"] += t2 - t1
             t_ls = time.perf_counter()
-            E0 = math.nan if lifted else self._energy(u)  # lifted steps only need a finite trial energy
+            E0 = math.nan if lifted else p.energy(u)  # lifted steps only need a finite trial energy
             if not lifted and not math.isfinite(E0):
-                return NewtonResult(False, it, res, solve_time, assembly_time, shifted, "energy of the current state is not finite")
-            slope = self.ranks.dot(r, du)
+                return NewtonResult(False, it, res, solve_time, assembly_time, shifted,
+                                    "energy of the current state is not finite", noise_switches=noise_switches)
+            slope = p.ranks.dot(r, du)
             u0.data = u
 
             def line_search(slope):
@@ -317,23 +316,24 @@ class DisplacementNewton:
                 decrease of the residual norm. Guard: finite energy (J > 0 at the energy's
                 quadrature points) and J > 0 at the history points too (Psi_plus there feeds the
                 history; NaN would poison it)."""
+                nonlocal noise_switches
                 near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
                 noise_known = near_converged
                 s = 1.0
                 for _ in range(opt.max_line_search):
                     u.data = u0 + s * du
-                    E = self._energy(u)
-                    if math.isfinite(E) and self.min_J() > 0.0:
+                    E = p.energy(u)
+                    if math.isfinite(E) and p.admissible():
                         if lifted or E <= E0 + opt.armijo * s * slope:
                             return True
                         if not noise_known:
                             noise_known = True
-                            near_converged = self._energy_noise(u0, du, E0) > NOISE_FRACTION * abs(slope)
-                            self.energy_noise_switches += near_converged
+                            near_converged = energy_noise(p.energy, u, u0, du, E0) > NOISE_FRACTION * abs(slope)
+                            noise_switches += near_converged
                             u.data = u0 + s * du
                         if near_converged:
-                            self.a_u.Apply(u, tmp)
-                            if self.ranks.masked_norm(tmp, self._free_np) <= (1 - 1e-4 * s) * res:
+                            p.form.Apply(u, tmp)
+                            if p.ranks.masked_norm(tmp, p.free) <= (1 - 1e-4 * s) * res:
                                 return True
                     s *= 0.5
                 u.data = u0
@@ -346,22 +346,22 @@ class DisplacementNewton:
                 # does not decrease along it, or no fraction of it keeps J > 0 (near-singular
                 # tangent of broken elements after a large change of alpha): shift the tangent by
                 # mu M (Levenberg), mu raised tenfold each time
-                a_s = self._shift_form()
-                self._u_anchor.vec.data = u
-                mu = 1e-4 * self.E_max / self.ranks.min(self.h) ** 2
+                a_s, mu_par, anchor = p.shifted()
+                anchor.vec.data = u
+                mu = p.mu0()
                 for _ in range(6):
                     shifted += 1
-                    self._mu.Set(mu)
+                    mu_par.Set(mu)
                     t0 = time.perf_counter()
                     a_s.AssembleLinearization(u)
                     assembly_time += time.perf_counter() - t0
                     tm["assembly"] += time.perf_counter() - t0
                     t0 = time.perf_counter()
-                    inv_s = self._factorize(a_s)
+                    inv_s = p.factorize(a_s)
                     tm["factorization"] += time.perf_counter() - t0
-                    lifted_direction(a_s.mat, inv_s, r, rem, self._dir_np, w, tmp, du)
+                    lifted_direction(a_s.mat, inv_s, r, rem, p.fixed, w, tmp, du)
                     solve_time += time.perf_counter() - t0
-                    slope = self.ranks.dot(r, du)
+                    slope = p.ranks.dot(r, du)
                     t_ls = time.perf_counter()
                     ok = (lifted or slope < 0.0) and line_search(slope)
                     tm["line_search"] += time.perf_counter() - t_ls
@@ -374,12 +374,14 @@ class DisplacementNewton:
                 if done is not None:
                     return done
                 return NewtonResult(False, it, res, solve_time, assembly_time, shifted,
-                                    "line search failed" if not lifted else "no admissible step towards the boundary values")
+                                    "line search failed" if not lifted else "no admissible step towards the boundary values",
+                                    noise_switches=noise_switches)
         # one last residual check after the final update
-        self.a_u.Apply(u, r)
-        _, lifted, res, reac = residual_split(r, u, target, self._free_np, self._dir_np, load, self._ranks_or_none)
+        p.form.Apply(u, r)
+        _, lifted, res, reac = residual_split(r, u, target, p.free, p.fixed, load, ranks)
         done = settled(opt.max_iterations)
         if done is not None:
             return done
         return NewtonResult(False, opt.max_iterations, res, solve_time, assembly_time, shifted,
-                            f"no convergence in {opt.max_iterations} iterations (residual {res:.3e} N)")
+                            f"no convergence in {opt.max_iterations} iterations (residual {res:.3e} N)",
+                            noise_switches=noise_switches)

@@ -29,7 +29,7 @@ from ngtmc.discrete.boundary_conditions import BoundaryConditions
 from ngtmc.discrete.displacement_energy import DisplacementEnergy
 from ngtmc.discrete.energy_forms import _ExternalWork
 from ngtmc.discrete.phase_field import PhaseFieldHistory
-from ngtmc.discrete.newton import DISPLACEMENT_RTOL, DisplacementNewton, NewtonOptions, NewtonResult
+from ngtmc.discrete.newton import DISPLACEMENT_RTOL, NewtonOptions, NewtonResult
 from ngtmc.scene import Ranks
 from ngtmc.discrete.spaces import lower_order_outside
 from ngtmc.scene import Point, Support, Traction
@@ -67,7 +67,7 @@ def _newton_options(newton) -> NewtonOptions:
     return dataclasses.replace(newton)
 
 
-class Solver(BoundaryConditions, DisplacementEnergy, DisplacementNewton, PhaseFieldHistory):
+class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
     """Fields and solvers of a :class:`~ngtmc.scene.scene.Scene`.
 
     Attributes worth knowing: ``u`` (displacement GridFunction, mm), ``alpha`` (phase field

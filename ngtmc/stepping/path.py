@@ -26,25 +26,17 @@ applied: it bounds the dissipation per step, which the path now does itself):
 3. A dissipation step that moves the load by more than du_max is solved again with the
    dissipation scaled down in proportion (0.9 du_max / |load change|); if the load still moves
    too far, the crack has stopped and the step is a displacement step of du. So is the last
-   attempt of a step (du below 2 du_min, so the run would fail) whose dissipation solve failed,
-   whether the crack has arrested (the damage no longer responds to the load: the quick L-panel's
-   bordered Newton step asked for a load change of 5e11 mm there) or the solve stalled at every
-   dD (the paper L-panel at 6.2078 mm). Only the last attempt: doing so on every such failure
-   turned legitimate snaps into displacement steps (tests/test_extrude.py).
-   With ``prescale`` (off by default), where the secant predictor (rule 6) already moves the load
-   by more than du_max after a dissipation step, dD is scaled so before the first solve (the
-   quick 3D hemisphere's post-failure tail otherwise solved every step twice).
-   On a step's last attempt, a displacement step taken instead of a dissipation step ends, where
-   its coupled Newton fails, in the monolithic scheme's fallback (``coupled["fallback"]``,
-   default converged staggered passes at that load; such steps carry ``staggered_iterations``
-   > 0).
+   attempt of a step (du below 2 du_min) whose dissipation solve failed (an arrested crack, or a
+   solve stalled at every dD); only the last: doing so on every such failure turned legitimate
+   snaps into displacement steps (tests/test_extrude.py). With ``prescale`` (off by default),
+   where the secant predictor (rule 6) already moves the load by more than du_max, dD is scaled
+   so before the first solve. A displacement step on a step's last attempt whose coupled Newton
+   fails ends in the scheme's fallback (``coupled["fallback"]``; ``staggered_iterations`` > 0).
 4. On a new segment of the schedule (after a turning point) the rule starts afresh: rate 0,
    displacement steps first (an unloading segment does not dissipate).
-5. After a dissipation step the next step is a dissipation step too (no displacement attempt:
-   in stable growth after a crack run, a fixed-load Newton creeps where the dissipation-controlled
-   one converges in a few iterations: the crack advances element by element, each advance a small
-   snap-back; at the paper's resolution the fixed-load Newton also stalled before the peak),
-   unless the step had to be scaled below a quarter of dD (slow growth).
+5. After a dissipation step the next step is a dissipation step too (in stable growth after a
+   crack run a fixed-load Newton creeps: each element's advance is a small snap-back), unless
+   the step had to be scaled below a quarter of dD (slow growth).
 6. Every step starts from the secant predictor through the last two accepted states
    (:mod:`ngtmc.stepping.predictor`), or, without it, from the u solve with alpha_{n-1}.
 
@@ -58,6 +50,7 @@ Units: mm, N, MPa; D per mm of thickness in 2D.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -100,13 +93,19 @@ class DissipationPath(PathAcrossRefinement):
         Whether cut-backs cap the growth of dD (:mod:`ngtmc.stepping.sizing`).
     prescale : bool
         Rule 3 before the solve as well as after it (module docstring). Off by default: it
-        paid in the quick 3D hemisphere's tail and not in the quick 2D three-point bending
-        (docs/performance.md).
+        paid in the quick 3D hemisphere's tail and not in the quick 2D three-point bending.
+    coupled_step, fixed_step : callable
+        ``(load, info) -> (converged, info)``: the coupled Newton at a fixed load from the current
+        state (restored on failure), and the same with the scheme's fallback where it fails
+        (``coupled["fallback"]``); the simulation hands them in.
     """
 
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
-                 growth_ceiling: bool | str = "auto", prescale: bool = False):
+                 growth_ceiling: bool | str = "auto", prescale: bool = False, *,
+                 coupled_step: Callable, fixed_step: Callable):
         self.sim = sim
+        self.coupled_step = coupled_step
+        self.fixed_step = fixed_step
         #: rule 3 before the solve (module docstring)
         self.prescale = bool(prescale)
         self.coupled = c = sim.coupled
@@ -328,7 +327,7 @@ class DissipationPath(PathAcrossRefinement):
         (a displacement step taken instead of a dissipation step, where no dissipation step is
         left to try), where the coupled Newton fails the monolithic scheme's fallback follows
         (``coupled["fallback"]``, default converged staggered passes at ``load``;
-        :meth:`ngtmc.stepping.schemes.StepSchemes._coupled_or_fallback`)."""
+        ``fixed_step``)."""
         sim, s = self.sim, self.sim.solver
         saved = s.get_state() if fallback and sim.fallback == "single-pass" else None
         pr = self.predictor
@@ -340,8 +339,8 @@ class DissipationPath(PathAcrossRefinement):
                 info["message"] = res.message
                 return False, info
         if fallback:
-            return sim._coupled_or_fallback(load, info, saved)
-        return sim._coupled_newton(load, info)
+            return self.fixed_step(load, info, saved)
+        return self.coupled_step(load, info)
 
     def accepted(self, step_size: float, iterations: int = 0, cutbacks: int = 0):
         """After an accepted step of |load change| ``step_size`` (mm), ``iterations`` Newton

@@ -47,7 +47,7 @@ class PathAcrossRefinement:
         sim, s = self.sim, self.sim.solver
         info = attempt_info()
         if at_load or self._last_kind != "dissipation":
-            ok, info = sim._coupled_newton(load, info)
+            ok, info = self.coupled_step(load, info)
             if ok:
                 info["t_new"] = t_new
             return ok, info

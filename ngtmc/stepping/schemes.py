@@ -176,8 +176,10 @@ class StepSchemes:
             self.coupled = CoupledNewton(self.solver, **copt)
         self._path = None
         if self.coupled is not None and self.path == "dissipation":
-            self._path = DissipationPath(self, self.crack_advance, self.crack_front, self.growth_ceiling,
-                                         prescale=self.prescale)
+            self._path = DissipationPath(
+                self, self.crack_advance, self.crack_front, self.growth_ceiling, prescale=self.prescale,
+                coupled_step=lambda load, info: self._coupled_newton(load, info),
+                fixed_step=lambda load, info, saved: self._coupled_or_fallback(load, info, saved))
             # a displacement step of the monolithic scheme carries no lag, so its size does not set
             # the accuracy: bound it by the curve's resolution (1/PATH_STEPS of the load path), not
             # by the du_max of the lagged schemes' Eq. 20
