@@ -25,7 +25,7 @@ MAX_LINES = 400
 
 def _graph():
     grimp = pytest.importorskip("grimp")
-    return grimp.build_graph("ngtmc", exclude_type_checking_imports=True)
+    return grimp.build_graph("ngtmc")
 
 
 def _cycles(graph) -> list[set]:

@@ -127,3 +127,14 @@ def test_benchmark_compares_histories_without_the_times():
     r = compare_histories(a, c)
     assert r["identical"] is False and 0 < r["max_abs_difference"] < 1e-11
     assert compare_histories(a, a.iloc[:1])["identical"] is False
+
+
+def test_compare_histories_sees_a_changed_value_and_ignores_the_times():
+    import pandas as pd
+    from benchmarks.compare_histories import differing_columns
+    a = pd.DataFrame({"step": [0, 1], "force": [0.0, float("nan")], "wall_time": [0.0, 1.0]})
+    b = a.assign(wall_time=[0.0, 2.0])
+    assert differing_columns(a, b) == []                    # NaN equals NaN, times ignored
+    assert differing_columns(a, b.assign(force=[0.0, 1.0])) == ["force"]
+    assert differing_columns(a, b.iloc[:1]) == ["(rows)"]
+    assert differing_columns(a, b.drop(columns="force")) == ["force"]

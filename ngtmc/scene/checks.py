@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import re
 import warnings
-from typing import TYPE_CHECKING, Mapping
+from typing import Mapping
 
 import numpy as np
 import ngsolve as ngs
@@ -26,9 +26,6 @@ from ngtmc.scene.regions import region_names, vertices_of
 from ngtmc.scene.scale import check_scale
 from ngtmc.scene.warnings import ElementWarning, ResolutionWarning
 from ngtmc.model import check_split
-
-if TYPE_CHECKING:
-    from ngtmc.scene.scene import Scene
 
 __all__ = ["check_scene"]
 
@@ -52,7 +49,7 @@ def _boundary_points(mesh, boundary: str) -> np.ndarray:
     return np.vstack(out)
 
 
-def check_scene(scene: Scene, refine_to: float | None = None) -> Scene:
+def check_scene(scene, refine_to: float | None = None):
     """Validate every input of ``scene`` and warn about its resolution (the body of
     :meth:`ngtmc.scene.scene.Scene.check`, which documents it). Returns the scene."""
     mesh = scene.mesh
@@ -155,7 +152,7 @@ def _check_mesh(mesh):
                          f"{' ...' if tiny.size > 5 else ''}; a degenerate or inverted element cannot be solved on")
 
 
-def _check_conditions(scene: Scene, need_boundary):
+def _check_conditions(scene, need_boundary):
     """Supports and loads: names, shapes, values, and no two conditions on one component."""
     mesh, d = scene.mesh, scene.mesh.dim
     if not scene.supports and not any(isinstance(ld, (DisplacementLoad, DisplacementField)) and
@@ -270,7 +267,7 @@ def _check_shared_vertices(mesh, held: dict, moving: set):
                              "Name the boundary without that corner, or hold the corner by a Point condition")
 
 
-def _check_field(scene: Scene, ld, desc, key):
+def _check_field(scene, ld, desc, key):
     """Shape and finiteness of a DisplacementField on its boundary or vertex, before any solve."""
     mesh, d = scene.mesh, scene.mesh.dim
     if key[0] == "vertex":
@@ -290,7 +287,7 @@ def _check_field(scene: Scene, ld, desc, key):
         raise ValueError(f"{desc}: the field is not finite (NaN or inf) at {tuple(float(v) for v in pts[bad])} mm")
 
 
-def _check_patterns(scene: Scene, regions):
+def _check_patterns(scene, regions):
     """Each mesh region matched by at most one pattern of ``materials`` and of ``density``; every
     pattern a valid regular expression."""
     maps = [("Scene.materials", scene.materials)]
@@ -314,7 +311,7 @@ def _check_patterns(scene: Scene, regions):
                     f"region exactly one pattern, e.g. list the regions as 'a|b|c'")
 
 
-def _check_resolution(scene: Scene, refine_to: float | None = None):
+def _check_resolution(scene, refine_to: float | None = None):
     mats = scene.mesh.GetMaterials()
     idx = np.array([el.index for el in scene.mesh.Elements(ngs.VOL)])
     h = scene.element_sizes() if refine_to is None else None   # with refine_to the mesh is not judged
