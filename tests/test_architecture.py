@@ -136,21 +136,33 @@ def test_no_module_is_longer_than_about_400_lines():
 
 
 @pytest.mark.slow
-def test_a_built_wheel_holds_every_module(tmp_path):
-    """pyproject.toml lists the packages (the studies live in studies/ and install as
-    ngtmc.studies): a subpackage missing from the list would be dropped from the wheel silently."""
+def test_a_built_wheel_holds_every_module_and_no_other(tmp_path):
+    """setup.py finds the packages (the studies live in studies/ and install as ngtmc.studies,
+    with their records): a wheel built from the tracked files holds every module and record of
+    the tree, and none that the tree lacks (a stale ``build/`` folder once shipped a renamed
+    module)."""
     pytest.importorskip("build")
-    res = subprocess.run([sys.executable, "-m", "build", "--wheel", "--no-isolation", "--skip-dependency-check", "--outdir", str(tmp_path),
-                          str(ROOT)], capture_output=True, text=True)
+    src = tmp_path / "src"
+    files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT, capture_output=True,
+                           text=True).stdout.split()
+    if not files:
+        pytest.skip("not a git checkout")
+    for f in files:
+        if (ROOT / f).is_file():
+            (src / f).parent.mkdir(parents=True, exist_ok=True)
+            (src / f).write_bytes((ROOT / f).read_bytes())
+    res = subprocess.run([sys.executable, "-m", "build", "--wheel", "--no-isolation", "--skip-dependency-check",
+                          "--outdir", str(tmp_path / "dist"), str(src)], capture_output=True, text=True)
     if res.returncode != 0 and "No module named" in res.stderr:
         pytest.skip(res.stderr[-300:])
     assert res.returncode == 0, res.stderr[-3000:]
-    wheel = next(tmp_path.glob("ngtmc-*.whl"))
-    names = set(zipfile.ZipFile(wheel).namelist())
-    want = {p.relative_to(ROOT).as_posix() for p in (ROOT / "ngtmc").rglob("*.py")}
-    want |= {"ngtmc/studies/" + p.name for p in (ROOT / "studies").glob("*.py")}
-    missing = sorted(want - names)
-    assert not missing, f"modules missing from the wheel: {missing}"
+    wheel = next((tmp_path / "dist").glob("ngtmc-*.whl"))
+    names = {n for n in zipfile.ZipFile(wheel).namelist() if n.endswith((".py", ".json"))}
+    want = {p.relative_to(src).as_posix() for p in (src / "ngtmc").rglob("*.py")}
+    want |= {"ngtmc/studies/" + p.relative_to(src / "studies").as_posix()
+             for p in (src / "studies").rglob("*") if p.suffix in (".py", ".json")}
+    assert not sorted(want - names), f"missing from the wheel: {sorted(want - names)}"
+    assert not sorted(names - want), f"in the wheel but not in the tree: {sorted(names - want)}"
 
 
 def test_a_subpackage_is_imported_through_its_face():
