@@ -21,3 +21,22 @@ def test_every_name_in_all_exists(name):
     mod = importlib.import_module(name)
     missing = [n for n in getattr(mod, "__all__", []) if not hasattr(mod, n)]
     assert not missing, f"{name}.__all__ names {missing}, which the module does not define"
+
+
+def test_one_version_everywhere():
+    """ngtmc/version.py owns the version: the installed metadata (pyproject.toml reads it) and
+    CITATION.cff state the same."""
+    import importlib.metadata
+    import pathlib
+    import re
+    import ngtmc
+    root = pathlib.Path(__file__).resolve().parents[1]
+    cff = re.search(r"^version:\s*(\S+)", (root / "CITATION.cff").read_text(), re.M).group(1)
+    assert cff == ngtmc.__version__
+    toml = (root / "pyproject.toml").read_text()
+    assert 'dynamic = ["version"]' in toml and 'attr = "ngtmc.version.__version__"' in toml
+    try:
+        installed = importlib.metadata.version("ngtmc")
+    except importlib.metadata.PackageNotFoundError:
+        return
+    assert installed == ngtmc.__version__, "reinstall (pip install -e .): the installed metadata is older"
