@@ -59,7 +59,7 @@ beams act in parallel, F = k (2 u - gap) (0.1236 N/mm at u = 0.3). The classical
 follows this within about 1 %. The TMC curve with gamma0 = 1e-4 is dominated by the void (the
 lower beam is dragged along long before contact).
 
-Results (records: ``studies/records/contact_gamma0.json``, ``ngtmc.study.measured("contact_gamma0")``)
+Results (records: ``studies/records/contact_gamma0.json``, ``ngtmc.study.records("contact_gamma0")``)
 -----------------------------------------------------------------------------------------------------
 TMC force at 0.3 mm relative to the classical one, and parasitic force at half the gap (N/mm):
 

@@ -58,7 +58,7 @@ crack started by 6.3 mm; unloading with alpha and W_f constant; reloading softer
 peak, 7.6 kN. Winkler's experimental band (peak 6.7 - 7.6 kN at 0.2 mm) is shown shifted by the gap.
 
 Results (forces for the whole panel; every run with its command, date and notes:
-``studies/records/l_panel.json``, ``ngtmc.study.measured("l_panel")``)
+``studies/records/l_panel.json``, ``ngtmc.study.records("l_panel")``)
 ------------------------------------------------------------------------------------------
 ==============================  ==================  ===================  ==================================
 case main, schedule 0-6.3-6-7   first loading       reload peak          record

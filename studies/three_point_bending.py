@@ -51,7 +51,7 @@ reference slope; peak 42 N/mm at 0.046 + 0.05 = 0.096 mm (Ambati et al. 2015, Fi
 by the gap); the published curves span 35-42 N/mm (the Miehe curve peaks at 34.7 N/mm).
 
 Results (path following; every run with its command and notes in
-``studies/records/three_point_bending.json``, ``ngtmc.study.measured("three_point_bending")``)
+``studies/records/three_point_bending.json``, ``ngtmc.study.records("three_point_bending")``)
 ------------------------------------------------------------------------------------------------
 ==========  =====================  =======================  =========================
 resolution  peak [N/mm] at [mm]    steps, Newton, wall [s]  record
