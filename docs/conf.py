@@ -21,6 +21,7 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))          # the ngtmc of this tree, installed or not
+sys.path.insert(0, str(Path(__file__).resolve().parent))   # docs/benchmark_tables.py
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import ngtmc  # noqa: E402
@@ -78,7 +79,7 @@ sphinx_gallery_conf = {
 
 html_theme = "furo"
 html_title = f"ngtmc {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]               # report.png, the picture of the README and of outputs.md
 html_show_sourcelink = False
 html_copy_source = False
 
@@ -182,6 +183,9 @@ def _fill_generated(app, docname, source):
                             _api_block("ngtmc.sensitivities", list(sens.__all__)))
     elif docname == "studies":
         text = text.replace("<!-- ngtmc: studies -->", _studies_block())
+    elif docname == "benchmarks":
+        import benchmark_tables
+        text = text.replace("<!-- ngtmc: benchmarks -->", benchmark_tables.block())
     source[0] = text
 
 

@@ -131,8 +131,7 @@ def _on_the_crack(mesh, tip: np.ndarray, opening: np.ndarray, near: np.ndarray) 
     paper-resolution three-point bending with the direction mended, the corridor of 0.15 mm ran
     parallel to the crack but beside it (its fine elements at x = 3.89 to 4.20 mm, the crack at
     x = 3.99 to 4.02 mm); with the line moved, the front's centroid at x = 4.012 mm gave the
-    line's origin at 4.002 mm (docs/adaptivity.md, "The corridor's line on the crack, its strip
-    kept, and no ceiling after a refinement")."""
+    line's origin at 4.002 mm (docs/adaptivity.md, "A corridor along the crack's path")."""
     if not near.any():
         return tip
     m = np.average(centroids(mesh)[near], axis=0, weights=_areas(mesh)[near])

@@ -23,7 +23,7 @@ Supported so far: every scheme (the coupled Newton's systems gathered on rank 0 
 :mod:`ngtmc.coupled.linear`), displacement loads on boundaries,
 supports, densities given per region, no adaptive refinement, no run folder from ``simulate``
 (``out_dir``); the runner writes one from rank 0 (``ngtmc run --mpi``, ``run_study(mpi=True)``:
-history, metadata and report, without snapshots or checkpoints). :func:`check_supported` refuses
+history, metadata, report and the snapshots gathered on rank 0; each rank checkpoints its part). :func:`check_supported` refuses
 the rest clearly.
 """
 from __future__ import annotations
