@@ -5,4 +5,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
-python -m sphinx -W --keep-going -b html docs docs/_build/html "$@"
+# -E: every page read again, so that the pages generated from the package and the records are current
+python -m sphinx -E -W --keep-going -b html docs docs/_build/html "$@"

@@ -171,6 +171,25 @@ def _studies_block() -> str:
                    f"Run: `ngtmc run {cli}` (resolutions: {resolutions}; default "
                    f"{getattr(study, 'DEFAULT_RESOLUTION', 'quick')}). Parameters: `ngtmc show {cli}`. "
                    f"Source: `studies/{name}.py` (`ngtmc.studies.{name}`).\n")
+        expected = getattr(study, "EXPECTED", {}) or {}
+        if expected:
+            out.append("What its run is held to (`EXPECTED`; `tests/test_expected.py` checks the quick run):\n")
+            out.append("| quantity | case | reference | tolerance | source |\n|:---|:---|---:|---:|:---|")
+            for key, e in expected.items():
+                unit = "" if e.get("unit") in (None, "-") else " " + e["unit"]
+                tol = f"{100 * e['rel']:g} %" if e.get("rel") is not None else (
+                    f"{e.get('abs'):g}{unit}" if e.get("abs") is not None else "-")
+                value = e.get("value")
+                value = f"{value:.5g}{unit}" if isinstance(value, (int, float)) else str(value)
+                out.append(f"| {e.get('quantity', key)} | {e.get('case', '-')} | {value} | {tol} | "
+                           f"{_escape_bars(str(e.get('source', '')))} |")
+            out.append("")
+        records = ROOT / "studies" / "records" / f"{name}.json"
+        if records.is_file():
+            out.append(f"Measured runs, each with its command, date and commit: `studies/records/{name}.json` "
+                       f"(`ngtmc.study.records(\"{name}\")`)."
+                       + (" Why the peaks differ from the published ones: [Fidelity](fidelity.md)."
+                          if name == "three_point_bending" else "") + "\n")
     return "\n".join(out)
 
 
