@@ -14,6 +14,7 @@ import argparse
 import datetime as _dt
 import json
 from pathlib import Path
+import shlex
 import sys
 
 import numpy as np
@@ -71,7 +72,7 @@ def main(argv=None) -> int:
     if args.out is not None:
         stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
         args.out.mkdir(parents=True, exist_ok=True)
-        cmd = "python -m benchmarks.compare_histories " + " ".join(sys.argv[1:] if argv is None else argv)
+        cmd = "python -m benchmarks.compare_histories " + shlex.join(sys.argv[1:] if argv is None else argv)
         (args.out / f"compare-{stamp}.md").write_text(f"### Histories compared ({stamp})\n\n`{cmd}`\n\n{text}")
         (args.out / f"compare-{stamp}.json").write_text(json.dumps(
             {"command": cmd, "date": stamp, "runs": dict(rows), "differing_columns": diff}, indent=1, default=str))
