@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: The subpackages of ngtmc, from the bottom layer to the top (pyproject.toml's layers contract
 #: orders them); the package's top level holds only its face, the command line and the version.
 SUBPACKAGES = ["model", "scene", "discrete", "coupled", "stepping", "adapt", "classical", "simulation",
-               "sensitivities", "study", "report", "runner"]
+               "sensitivities", "design", "study", "report", "runner"]
 TOP_LEVEL = {"__init__.py", "__main__.py", "cli.py", "version.py"}
 MAX_LINES = 400
 
