@@ -200,6 +200,8 @@ def _fill_generated(app, docname, source):
         text = text.replace("<!-- ngtmc: api ngtmc -->", _api_block("ngtmc", list(ngtmc.__all__)))
         text = text.replace("<!-- ngtmc: api ngtmc.sensitivities -->",
                             _api_block("ngtmc.sensitivities", list(sens.__all__)))
+        import ngtmc.design as design
+        text = text.replace("<!-- ngtmc: api ngtmc.design -->", _api_block("ngtmc.design", list(design.__all__)))
     elif docname == "studies":
         text = text.replace("<!-- ngtmc: studies -->", _studies_block())
     elif docname == "benchmarks":
