@@ -15,16 +15,16 @@ L0_SWEEP_KEYS = ("quick_monotonic", "quick_monotonic_l0_4.75", "quick_monotonic_
                  "quick_monotonic_l0_33.33_h_far_8")
 #: The runs of the paper's schedule with the refined band over the whole width (band_left = 0) and
 #: the same-resolution control with the study's band, record keys.
-WHOLE_WIDTH_KEYS = ("medium_path_following_band_left_0_2026_12_05",
-                    "quick_path_following_band_left_0_l0_2.375_2026_12_05",
-                    "quick_path_following_band_left_0_l0_4.75_2026_12_05",
-                    "quick_path_following_band_left_150_l0_4.75_2026_12_05",
-                    "medium_path_following_band_left_0_l0_4.75_2026_12_05",
-                    "quick_path_following_band_left_0_l0_12_2026_12_05")
+WHOLE_WIDTH_KEYS = ("medium_path_following_band_left_0",
+                    "quick_path_following_band_left_0_l0_2.375",
+                    "quick_path_following_band_left_0_l0_4.75",
+                    "quick_path_following_band_left_150_l0_4.75",
+                    "medium_path_following_band_left_0_l0_4.75",
+                    "quick_path_following_band_left_0_l0_12")
 #: the recorded medium runs with the paper's schedule and path following, by l0 (mm)
-MEDIUM_PAPER_SCHEDULE_BY_L0 = {1.1875: "medium_path_following_paper_schedule_2026_12_03",
-                               2.375: "medium_path_following_l0_2.375_2026_12_05",
-                               4.75: "medium_path_following_l0_4.75_2026_12_05"}
+MEDIUM_PAPER_SCHEDULE_BY_L0 = {1.1875: "medium_path_following_paper_schedule",
+                               2.375: "medium_path_following_l0_2.375",
+                               4.75: "medium_path_following_l0_4.75"}
 
 
 def measured() -> dict:
@@ -78,9 +78,9 @@ def figures(p: dict) -> list[dict]:
              "x": [1.1875], "y": [float(runs["medium_monotonic"]["peak_force"])]},
             {"label": "this model, first-loading peak at medium, path following (no damage lag)", "kind": "points",
              "x": [1.1875, 1.1875],
-             "y": [float(runs["quick_turn_past_the_peak_2026_12_03"]["path_following_medium"]
+             "y": [float(runs["quick_turn_past_the_peak"]["path_following_medium"]
                          ["first_loading_peak_force"]),
-                   float(runs["medium_path_following_paper_schedule_2026_12_03"]["first_loading_peak_force"])]},
+                   float(runs["medium_path_following_paper_schedule"]["first_loading_peak_force"])]},
         ],
     }, _reload_figure(), _reload_l0_figure()]
 
@@ -103,7 +103,7 @@ def _reload_l0_figure() -> dict:
     whole_width = [runs[k] for k in WHOLE_WIDTH_KEYS]
     l0s = sorted(MEDIUM_PAPER_SCHEDULE_BY_L0)
     rec = [runs[MEDIUM_PAPER_SCHEDULE_BY_L0[l0]] for l0 in l0s]
-    wide = runs["medium_path_following_band_left_100_2026_12_05"]
+    wide = runs["medium_path_following_band_left_100"]
     quick_band = sorted((r for r in whole_width if r["band_left"] > 0 and r["status"] == "finished"),
                         key=lambda r: r["l0"])
     x = [l0s[0] / 1.2, l0s[-1] * 1.2]
@@ -149,8 +149,8 @@ def _reload_figure() -> dict:
     first-loading peak): path following and the paper's single-pass scheme at quick, path following
     at the paper's resolution, against the paper's 7.6 kN."""
     runs = measured()
-    turn = runs["quick_turn_past_the_peak_2026_12_03"]
-    paper = runs["paper_path_following_completed_2026_12_03"]
+    turn = runs["quick_turn_past_the_peak"]
+    paper = runs["paper_path_following_completed"]
     x = [6.55, 6.85]
     return {
         "title": "Reload peak of the cracked panel (recorded runs)",
@@ -174,11 +174,11 @@ def _reload_figure() -> dict:
              "x": [turn["path_following_medium"]["reload_peak_load"]],
              "y": [float(turn["path_following_medium"]["reload_peak_force"])]},
             {"label": "path following, medium (turning point 6.3 mm)", "kind": "points",
-             "x": [runs["medium_path_following_paper_schedule_2026_12_03"]["reload_peak_load"]],
-             "y": [float(runs["medium_path_following_paper_schedule_2026_12_03"]["reload_peak_force"])]},
+             "x": [runs["medium_path_following_paper_schedule"]["reload_peak_load"]],
+             "y": [float(runs["medium_path_following_paper_schedule"]["reload_peak_force"])]},
             {"label": "path following, medium, spectral split (turning point 6.3 mm)", "kind": "points",
-             "x": [runs["medium_path_following_paper_schedule_spectral_2026_12_04"]["reload_peak_load"]],
-             "y": [float(runs["medium_path_following_paper_schedule_spectral_2026_12_04"]["reload_peak_force"])]},
+             "x": [runs["medium_path_following_paper_schedule_spectral"]["reload_peak_load"]],
+             "y": [float(runs["medium_path_following_paper_schedule_spectral"]["reload_peak_force"])]},
             {"label": "path following, paper resolution (turning point 6.3 mm)", "kind": "points",
              "x": [paper["reload_peak_load"]], "y": [float(paper["reload_peak_force"])]},
             {"label": "Ciceri et al. 2026: reload peak 7.6 kN (displacement not given)", "kind": "curve", "x": x,

@@ -97,7 +97,7 @@ What did not work
 * Explaining the +16 % of the paper-resolution reload peak by the single-pass scheme (reloads 3 %
   higher), the element size (+1.7 % from medium), the split (the same to four digits), the
   indenter's radius (-0.2 %) or a held segment instead of the indenter (+10.6 %): records
-  ``quick_turn_past_the_peak_2026_12_03`` and ``medium_path_following_*``.
+  ``quick_turn_past_the_peak`` and ``medium_path_following_*``.
 * A larger l0 to meet Winkler's band: none does; l0 = 4.75 mm meets Ambati's 16 kN, but Ambati
   used 1.1875 mm.
 """

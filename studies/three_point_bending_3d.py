@@ -78,7 +78,7 @@ The hemisphere's peak falls by 2.5 % and 1.7 % from quick to medium to paper. Th
 dissipation steps before their solve (``coupled={"prescale": True}``). With ``h_crack`` the slab
 follows its refined 2D twin (+0.004 %); the hemisphere refined from a coarse band peaks within
 2 % of the bands, but with more tetrahedra at the peak than the medium band (records
-``quick_*_amr_2026_12_05``, docs/adaptivity.md). The run's peak memory is in ``metadata.json``
+``quick_*_amr``, docs/adaptivity.md). The run's peak memory is in ``metadata.json``
 (``results.<case>.peak_memory_mb``) and the report.
 
 What did not work: docs/three-d.md, section "What did not work".

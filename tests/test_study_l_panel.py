@@ -190,27 +190,27 @@ def test_reload_peak_record():
     split (spectral against J-based vol-dev at medium), nor the load introduction (a held segment
     without indenter and void reloads higher; half the indenter's radius reloads the same); at
     the paper's resolution the reload peak lies 16.2 % above 7.6 kN."""
-    turn = MEASURED["quick_turn_past_the_peak_2026_12_03"]
+    turn = MEASURED["quick_turn_past_the_peak"]
     pf, sp = turn["path_following"], turn["single_pass"]
     assert pf["unload_wf_growth"] == 0.0 and sp["unload_wf_growth"] > 0.4 * sp["wf_at_turning_point"]
     assert sp["reload_peak_force"] > pf["reload_peak_force"] > 7600.0
-    paper = MEASURED["paper_path_following_completed_2026_12_03"]
+    paper = MEASURED["paper_path_following_completed"]
     assert paper["reload_peak_force"] / 7600.0 - 1.0 == pytest.approx(0.162, abs=0.001)
     fig = S.figures(study_parameters(S, "quick")[1])[1]
     ys = [s["y"][0] for s in fig["series"] if s["kind"] == "points"]
     med = turn["path_following_medium"]
-    med6 = MEASURED["medium_path_following_paper_schedule_2026_12_03"]
-    spectral = MEASURED["medium_path_following_paper_schedule_spectral_2026_12_04"]
+    med6 = MEASURED["medium_path_following_paper_schedule"]
+    spectral = MEASURED["medium_path_following_paper_schedule_spectral"]
     assert ys == [pf["reload_peak_force"], sp["reload_peak_force"], med["reload_peak_force"],
                   med6["reload_peak_force"], spectral["reload_peak_force"], paper["reload_peak_force"]]
     # nor does the split: Miehe's spectral split reloads to the J-based vol-dev split's peak
     assert spectral["reload_peak_force"] == pytest.approx(med6["reload_peak_force"], rel=1e-3)
     # nor does the load introduction: without indenter and void (a held segment) the reload peak
     # at medium is higher, not lower
-    segment = MEASURED["medium_path_following_segment_2026_12_04"]
+    segment = MEASURED["medium_path_following_segment"]
     assert segment["reload_peak_force"] > 1.05 * med6["reload_peak_force"]
     # nor the indenter's radius (ours, 20 mm): halved, the reload peak moves by 0.2 %
-    r10 = MEASURED["medium_path_following_indenter_r10_2026_12_04"]
+    r10 = MEASURED["medium_path_following_indenter_r10"]
     assert r10["reload_peak_force"] == pytest.approx(med6["reload_peak_force"], rel=0.01)
     # turning point 6.6 mm: quick is too coarse, the reload peak falls to medium by about the square
     # root of the toughness factors
@@ -236,7 +236,7 @@ def test_reload_peak_against_l0_record():
     the same numbers."""
     l0s = (1.1875, 2.375, 4.75)
     rec = [MEASURED[S.MEDIUM_PAPER_SCHEDULE_BY_L0[l0]] for l0 in l0s]
-    assert rec[0] is MEASURED["medium_path_following_paper_schedule_2026_12_03"]
+    assert rec[0] is MEASURED["medium_path_following_paper_schedule"]
     assert [r.get("l0", S.PARAMETERS["l0"][0]) for r in rec] == list(l0s)
     first = [r["first_loading_peak_force"] for r in rec]
     reload = [r["reload_peak_force"] for r in rec]
@@ -256,9 +256,9 @@ def test_reload_peak_set_by_the_band_end_record():
     band's end by the turning point in both runs (x = 149 and 100 mm), so the wider band's crack is
     50 mm longer there and the reload peak halves, from above the paper's 7.6 kN to below it. The
     report's third figure shows the point."""
-    band = MEASURED["medium_path_following_paper_schedule_2026_12_03"]
-    r10 = MEASURED["medium_path_following_indenter_r10_2026_12_04"]  # reloads as band does, crack_x recorded
-    wide = MEASURED["medium_path_following_band_left_100_2026_12_05"]
+    band = MEASURED["medium_path_following_paper_schedule"]
+    r10 = MEASURED["medium_path_following_indenter_r10"]  # reloads as band does, crack_x recorded
+    wide = MEASURED["medium_path_following_band_left_100"]
     assert S.PARAMETERS["band_left"][0] == 150.0 and wide["band_left"] == 100.0
     assert r10["crack_x_at_turning_point"] == pytest.approx(150.0, abs=2.0)
     assert wide["crack_x_at_turning_point"] == pytest.approx(100.0, abs=2.0)
@@ -278,8 +278,8 @@ def test_a_crack_free_to_run_breaks_the_panel_record():
     panel's 250 mm width (x = 250 -> 4.3 mm), so reloading finds no peak, only a force below 3 % of the 100 mm
     band's reload peak: a crack resolved wherever it runs does not stop at l0 = 1.1875 mm, so the
     study's reload peaks are bounds set by the band (records medium_path_following_band_left_*)."""
-    wide = MEASURED["medium_path_following_band_left_100_2026_12_05"]
-    free = MEASURED["medium_path_following_band_left_0_2026_12_05"]
+    wide = MEASURED["medium_path_following_band_left_100"]
+    free = MEASURED["medium_path_following_band_left_0"]
     assert free["band_left"] == 0.0 and free["status"] == "finished"
     assert free["first_loading_peak_force"] == pytest.approx(wide["first_loading_peak_force"], rel=2e-3)
     track = free["crack_track"]
@@ -316,7 +316,7 @@ def test_whole_width_runs_break_the_panel_at_every_l0_record():
     # the unfinished medium run at 4 x l0: its crack passes where the band's crack stood at the turning
     # point while the load is still below 6.3 mm, and runs on while the load snaps back
     (med,) = [r for r in WHOLE_WIDTH if r["resolution"] == "medium" and r["l0"] == 4.75]
-    band475 = MEASURED["medium_path_following_l0_4.75_2026_12_05"]
+    band475 = MEASURED["medium_path_following_l0_4.75"]
     assert med["first_loading_peak_force"] == pytest.approx(band475["first_loading_peak_force"], rel=0.01)
     track = med["crack_track"]
     assert all(t1[4] <= t0[4] for t0, t1 in zip(track, track[1:])) and max(t[1] for t in track) < 6.3
