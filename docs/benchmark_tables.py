@@ -5,6 +5,7 @@ names its command, commit, date and machine and links its record; nothing is typ
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
@@ -37,7 +38,6 @@ def _machine(rec: dict) -> str:
 
 def _date(rec: dict, path: Path) -> str:
     """YYYY-MM-DD of the record (its date field, else the time stamp in its file name)."""
-    import re
     for text in (str(rec.get("date_utc") or rec.get("date") or ""), path.stem):
         m = re.search(r"(20\d\d)-?(\d\d)-?(\d\d)", text)
         if m:
@@ -91,8 +91,7 @@ def other_table() -> str:
     for path, rec in _records():
         if isinstance(rec.get("runs"), list) and "study" in rec:
             continue
-        name = rec.get("benchmark") or path.stem.rsplit("-", 1)[0]
-        name = name.split("-2026")[0].split("-2025")[0]
+        name = rec.get("benchmark") or re.sub(r"-\d{8}T\d{6}Z.*$", "", path.stem)   # the stem before its time stamp
         if name not in latest or path.name >= latest[name][0].name:
             latest[name] = (path, rec)
     out = ["| benchmark | date | commit | machine | command | record |", "|:---|:---|:---|:---|:---|:---|"]

@@ -129,8 +129,3 @@ class Regions:
     fracture: np.ndarray
     regulariser_regex: str
     sizes: np.ndarray
-
-    def where(self, pattern: str) -> np.ndarray:
-        """Per element: its region's name matches ``pattern`` (False everywhere for "")."""
-        ids = [i for i, m in enumerate(self.names) if pattern and matches(pattern, m)]
-        return np.isin(self.index, ids)
