@@ -104,6 +104,12 @@ class CoupledPath(Path):
 
 
 # ====================================================================== forward
+
+class FallbackStep(ValueError, RuntimeError):
+    """A step of a monolithic run was accepted by a fallback (staggered passes), not by the coupled
+    Newton, so the path cannot be differentiated. A ValueError (the run cannot be recorded as
+    asked) and a RuntimeError (it is an outcome of the run: smaller steps may avoid it)."""
+
 def record_coupled_path(scene: Scene, schedule, control=None, newton=None, checkpoint_every=None,
                         **options) -> CoupledPath:
     """:func:`ngtmc.sensitivities.record_path` for ``scheme="monolithic"`` or ``"path-following"``
@@ -153,7 +159,7 @@ def record_coupled_path(scene: Scene, schedule, control=None, newton=None, check
         n = len(states)
         if not (last and np.array_equal(last["u"], s.u.vec.FV().NumPy())
                 and np.array_equal(last["alpha"], s.alpha.vec.FV().NumPy())):
-            raise ValueError(f"record_path: step {n} (load {row['load']:.6g} mm) was not solved by the coupled Newton "
+            raise FallbackStep(f"record_path: step {n} (load {row['load']:.6g} mm) was not solved by the coupled Newton "
                              f"(a fallback of the monolithic scheme took it: staggered_iterations = "
                              f"{row.get('staggered_iterations')}); it cannot be differentiated. Use "
                              f"scheme='path-following' or smaller steps")

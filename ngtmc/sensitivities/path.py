@@ -56,6 +56,8 @@ class Path:
         every material, keyed ``"E@<id>"``) the path was computed with.
     forward_time : float
         Wall time of the forward run, s.
+    newton_iterations : int or None
+        Newton iterations of the whole run (a :func:`replay` counts its own; None where not counted).
     checkpoint_every : int or None
         None: every state is stored. k: only states 0, k, 2k, ... and N are stored; the others are
         recomputed from the previous stored state when needed (:meth:`state`), one segment of at
@@ -71,6 +73,7 @@ class Path:
     forward_time: float = 0.0
     history: object = None
     checkpoint_every: int | None = None
+    newton_iterations: int | None = None
     _segment: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -215,6 +218,7 @@ def _step(s: Solver, load: float, n: int):
     if not ok:
         raise RuntimeError(f"replay: step {n} (load {load:.6g} mm) failed: {info['message']}")
     s.update_history(info["H_trial"])
+    return int(info.get("newton_iterations", 0))
 
 
 def _thin(states: list, k: int | None):
@@ -265,7 +269,8 @@ def record_single_pass(scene: Scene, schedule: Schedule | float, control: Adapti
     loads = np.asarray(result.history["load"], dtype=float)
     return Path(solver=s, loads=loads, states=states, forces=np.asarray(forces), rho=s.rho.vec.FV().NumPy().copy(),
                 parameters=_snapshot_parameters(s), forward_time=time.perf_counter() - t0, history=result.history,
-                checkpoint_every=checkpoint_every)
+                checkpoint_every=checkpoint_every,
+                newton_iterations=int(result.history["newton_iterations"].fillna(0).sum()))
 
 
 def replay_inputs(path, rho=None, parameters: dict | None = None):
@@ -301,11 +306,13 @@ def replay(path: Path, rho: np.ndarray | None = None, parameters: dict | None = 
     _reset(s)
     states = [_capture(s)]
     forces = [s.reaction()]
+    newton = 0
     for n, load in enumerate(path.loads[1:], start=1):
-        _step(s, float(load), n)
+        newton += _step(s, float(load), n)
         states.append(_capture(s))
         forces.append(s.reaction())
         _thin(states, path.checkpoint_every)
     return Path(solver=s, loads=path.loads.copy(), states=states, forces=np.asarray(forces), rho=new_rho,
-                parameters=pars, forward_time=time.perf_counter() - t0, checkpoint_every=path.checkpoint_every)
+                parameters=pars, forward_time=time.perf_counter() - t0, checkpoint_every=path.checkpoint_every,
+                newton_iterations=newton)
 
