@@ -35,12 +35,14 @@ class OptimisationResult:
 
 def mma(objective: Callable, x0, lower=0.0, upper=1.0, constraints: Sequence[Callable] = (),
         max_evaluations: int = 100, xtol_rel: float = 1e-6, ftol_rel: float = 0.0,
-        callback: Callable | None = None) -> OptimisationResult:
+        callback: Callable | None = None, initial_step: float | None = None) -> OptimisationResult:
     """Minimise ``objective(x) -> (value, gradient)`` subject to ``c(x) -> (value, gradient) <= 0``
     for every ``c`` of ``constraints``, with ``lower <= x <= upper`` (numbers or arrays), from
     ``x0``, by MMA. Stops after ``max_evaluations`` evaluations, or when the design moves by less
     than ``xtol_rel`` (relative) or the objective by less than ``ftol_rel`` (0: not used).
-    ``callback(x, value, record)`` is called after every evaluation. An objective or constraint
+    ``callback(x, value, record)`` is called after every evaluation. ``initial_step``: the first
+    distance of MMA's asymptotes from the design (nlopt's initial step, in the units of x): the
+    first iterations move no variable further than about that (a move limit that MMA then adapts). An objective or constraint
     that returns a value or gradient that is not finite (a failed forward run) stops the
     optimisation with a RuntimeError naming the evaluation: a failed run is never accepted."""
     try:
@@ -101,6 +103,10 @@ def mma(objective: Callable, x0, lower=0.0, upper=1.0, constraints: Sequence[Cal
     for i, c in enumerate(constraints):
         opt.add_inequality_constraint(wrap(i, c), 1e-8)
     opt.set_maxeval(int(max_evaluations))
+    if initial_step is not None:
+        if not (math.isfinite(float(initial_step)) and float(initial_step) > 0):
+            raise ValueError(f"mma: initial_step = {initial_step!r} must be a finite number > 0")
+        opt.set_initial_step(np.full(n, float(initial_step)))
     if xtol_rel:
         opt.set_xtol_rel(float(xtol_rel))
     if ftol_rel:
