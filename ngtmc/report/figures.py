@@ -73,9 +73,11 @@ def _fig_force(meta, history, cases, styles, log_y=False):
 def fig_study(spec: dict) -> dict:
     """A figure a study adds to its report (its optional ``figures(p)``, recorded in the metadata
     as ``figures``; docs/study-interface.md): ``title``, ``x_title``, ``y_title``, ``x_log``
-    (bool) and ``series``, each a dict with ``label``, ``kind`` ('curve', 'points' or 'band'),
-    ``x`` and ``y`` (or ``y_lower`` and ``y_upper`` for a band). Units belong in the titles."""
-    data = []
+    (bool) and ``series``, each a dict with ``label``, ``kind`` ('curve', 'points', 'band' or
+    'image'), ``x`` and ``y`` (or ``y_lower`` and ``y_upper`` for a band; for an image ``z``, a
+    list of rows bottom to top with values in [0, 1] drawn black to white (``reverse``: white to
+    black), and its grid ``x0``, ``dx``, ``y0``, ``dy``). Units belong in the titles."""
+    data, images = [], False
     for k, ser in enumerate(s for s in spec.get("series") or [] if isinstance(s, dict)):
         label = str(ser.get("label", f"series {k + 1}"))
         x = np.asarray(ser.get("x") or [], dtype=float)
@@ -90,6 +92,18 @@ def fig_study(spec: dict) -> dict:
             data.append(_line(x[:n], lo[:n], label, "rgba(120,120,120,0.6)", width=0.8, legendgroup=f"s{k}",
                               fill="tonexty", fillcolor="rgba(150,150,150,0.30)"))
             continue
+        if ser.get("kind") == "image":   # values on a regular grid: z rows bottom to top
+            z = np.asarray(ser.get("z") or [], dtype=float)
+            if z.ndim != 2 or z.size == 0:
+                continue
+            data.append({"type": "heatmap", "z": np.where(np.isfinite(z), z, None).tolist(), "name": label,
+                         "x0": float(ser.get("x0", 0.0)), "dx": float(ser.get("dx", 1.0)),
+                         "y0": float(ser.get("y0", 0.0)), "dy": float(ser.get("dy", 1.0)),
+                         "colorscale": "Greys", "reversescale": bool(ser.get("reverse", False)), "zmin": 0.0, "zmax": 1.0,
+                         "showscale": k == 0,
+                         "hovertemplate": f"{label}<br>x %{{x:.3f}} mm, y %{{y:.3f}} mm: %{{z:.2f}}<extra></extra>"})
+            images = True
+            continue
         y = np.asarray(ser.get("y") or [], dtype=float)
         n = min(len(x), len(y))
         if n == 0:
@@ -100,6 +114,8 @@ def fig_study(spec: dict) -> dict:
     lay = _layout(str(spec.get("title", "")), str(spec.get("x_title", "")), str(spec.get("y_title", "")))
     if spec.get("x_log"):
         lay["xaxis"]["type"] = "log"
+    if images:   # lengths drawn to scale
+        lay["yaxis"]["scaleanchor"] = "x"
     return {"data": data, "layout": lay}
 
 

@@ -195,8 +195,8 @@ def render_report(run_dir, output=None) -> Path:
         figs["fig-wf-alpha"] = _fig_wf_alpha(history, cases, styles)
     figs["fig-newton"] = _fig_newton(history, cases, styles)
     figs["fig-energies"] = _fig_energies(history, cases, styles, features)
-    study_figures = []  # what the study adds (its figures(p), recorded in the metadata)
-    for k, spec in enumerate(s for s in meta.get("figures") or [] if isinstance(s, dict)):
+    study_figures = []  # what the study adds (its figures(p) and its post_results' report_figure entries)
+    for k, spec in enumerate(_study_figure_specs(meta)):
         fid = f"fig-study-{k}"
         figs[fid] = fig_study(spec)
         study_figures.append({"id": fid, "title": str(spec.get("title", "")), "caption": str(spec.get("caption", ""))})
@@ -337,6 +337,17 @@ def render_report(run_dir, output=None) -> Path:
     out = Path(output) if output is not None else run_dir / "report.html"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(page, encoding="utf-8")
+    return out
+
+
+def _study_figure_specs(meta: dict) -> list[dict]:
+    """The figures a study adds: its ``figures(p)`` (metadata ``figures``), then those its
+    ``post_results`` puts in entries of ``results`` as ``report_figure`` (a dict or a list of
+    them; docs/study-interface.md)."""
+    out = [s for s in meta.get("figures") or [] if isinstance(s, dict)]
+    for entry in (meta.get("results") or {}).values():
+        spec = entry.get("report_figure") if isinstance(entry, dict) else None
+        out.extend(s for s in (spec if isinstance(spec, list) else [spec]) if isinstance(s, dict))
     return out
 
 

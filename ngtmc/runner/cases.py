@@ -11,7 +11,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ngtmc.simulation import Progress, RowCallbacks
+from ngtmc.simulation import Progress, RowCallbacks, force_unit
 from ngtmc.runner.outputs import CheckpointOutput, SnapshotOutput
 from ngtmc.scene import ResolutionWarning
 from ngtmc.runner.snapshots import Snapshots
@@ -171,7 +171,21 @@ class _Run(RunFolder):
             self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: {case.label}")
             t0 = time.perf_counter()
             df = case.run(case, self.out)
+            extra = dict(getattr(df, "attrs", None) or {})   # docs/study-interface.md: results, snapshots, solver
+            if extra:
+                df.attrs.clear()
             df = pd.DataFrame(df).copy()
+            if extra.get("solver") is not None:    # the mesh, dofs and features of the case's own solver
+                solver = extra["solver"]
+                info = _mesh_info(solver)
+                if self.mesh is None:
+                    self.mesh = dict(info, dim=solver.scene.dim)
+                self.case_meta[case.name] = {"mesh": info}
+                self.force_unit = self.force_unit or force_unit(solver.scene.dim, solver.scene.thickness)
+                self.thickness = self.thickness if self.thickness is not None else solver.scene.thickness
+                for key, has in (("fracture", solver.scene.has_fracture), ("void", solver.scene.has_void),
+                                 ("regulariser", solver.scene.regulariser is not None)):
+                    self.features[key] = bool(self.features.get(key, False) or has)
             if "step" not in df:
                 df["step"] = np.arange(len(df))
             if "wall_time" not in df:
@@ -179,10 +193,14 @@ class _Run(RunFolder):
                 df.loc[df.index[-1], "wall_time"] = time.perf_counter() - t0
             self.rows[case.name] = df.to_dict("records")
             res = case_results(df)
-            res.setdefault("wall_time_s", time.perf_counter() - t0)
+            res.update(extra.get("results") or {})
+            res["wall_time_s"] = time.perf_counter() - t0     # the whole case, not a run inside it
             res["status"] = "completed"
             self.results[case.name] = res
-            self.save_checkpoint(case, {"rows": self.rows[case.name]}, None, done=True)
+            snaparr = {f"{case.name}__{k}": np.asarray(v) for k, v in (extra.get("snapshots") or {}).items()}
+            if snaparr:
+                self.snaps[case.name] = snaparr
+            self.save_checkpoint(case, {"rows": self.rows[case.name]}, None, done=True, snaparr=snaparr)
             self.write_all()
             return
 

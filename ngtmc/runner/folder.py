@@ -229,9 +229,10 @@ class RunFolder:
         self.store = CheckpointStore(folder, rank=(self.comm.rank, self.comm.size))
 
     def save_checkpoint(self, case: Case, state: dict, snaps: Snapshots | None, done: bool,
-                        fingerprint: np.ndarray | None = None):
+                        fingerprint: np.ndarray | None = None, snaparr: dict | None = None):
         """Write ``case``'s checkpoint (``checkpoint/<case>.npz``; on MPI ranks each rank's own,
-        :meth:`use_rank_checkpoints`, with the ``fingerprint`` of its part of the mesh)."""
+        :meth:`use_rank_checkpoints`, with the ``fingerprint`` of its part of the mesh);
+        ``snaparr``: the snapshot arrays of a case computed by its own ``run`` (no ``snaps``)."""
         arrays = {"done": np.array(bool(done)), "rows": np.array(json.dumps(jsonable(state["rows"]))),
                   "results": np.array(json.dumps(jsonable(self.results.get(case.name, {})))),
                   "case_meta": np.array(json.dumps(jsonable(self.case_meta.get(case.name, {})))),
@@ -252,6 +253,8 @@ class RunFolder:
                 arrays["snap__" + k] = v
             for k, v in snaps.arrays(case.name).items():
                 arrays["snaparr__" + k] = v
+        for k, v in (snaparr or {}).items():
+            arrays["snaparr__" + k] = v
         self.store.save(case.name, arrays)
 
     @staticmethod

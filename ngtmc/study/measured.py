@@ -146,7 +146,8 @@ def record_from_run(run_dir, note: str = "") -> dict:
     its commit (``git_revision``), the machine, and as figures the run's status, wall time (s),
     mesh size and per case (``cases``) steps, Newton iterations, cut-backs, peak force and its
     load, final load and force and wall time (s). The history gives the numbers; the run's results
-    give a case's status and threads and, where recorded, its peak (the same definition)."""
+    give a case's status and threads and, where recorded, its peak (the same definition), and
+    under ``results`` every other number of the case's results (in the units of the run)."""
     run_dir = Path(run_dir)
     meta_file = run_dir / "metadata.json"
     if not meta_file.is_file():
@@ -155,7 +156,8 @@ def record_from_run(run_dir, note: str = "") -> dict:
     hist_file = run_dir / "history.csv"
     hist = pd.read_csv(hist_file) if hist_file.is_file() else pd.DataFrame()
     results = meta.get("results") or {}
-    names = list(results)
+    listed = [c.get("name") for c in meta.get("cases") or [] if isinstance(c, dict) and c.get("name")]
+    names = listed or list(results)      # the cases (not the entries a study's post_results adds)
     if "case" in hist:
         names += [c for c in dict.fromkeys(hist["case"].astype(str)) if c not in names]
     threads = {c.get("name"): c.get("threads") for c in meta.get("cases") or [] if isinstance(c, dict)}
@@ -164,7 +166,7 @@ def record_from_run(run_dir, note: str = "") -> dict:
         h = hist[hist["case"].astype(str) == name] if "case" in hist else hist
         fig = _case_figures(h)
         res = results.get(name) or {}
-        for key in ("peak_force", "peak_load"):
+        for key in ("peak_force", "peak_load", "wall_time_s"):   # the case's own (a run inside it has its own)
             if res.get(key) is not None:
                 fig[key] = _number(res[key])
         for key in ("status",):
@@ -172,6 +174,11 @@ def record_from_run(run_dir, note: str = "") -> dict:
                 fig[key] = res[key]
         if threads.get(name) is not None:
             fig["threads"] = int(threads[name])
+        # the other numbers the case's results hold (a case with its own run, e.g. an optimisation)
+        more = {k: _number(v) for k, v in sorted(res.items()) if k not in fig
+                and isinstance(v, (int, float)) and not isinstance(v, bool)}
+        if more:
+            fig["results"] = more
         cases[name] = fig
     mesh = meta.get("mesh") or {}
     figures = {"status": meta.get("status"), "wall_time_s": _number(meta.get("wall_time_s")),
