@@ -42,6 +42,7 @@ def data_path(name: str):
 #:     [project.entry-points."ngtmc.studies"]
 #:     my_study = "my_package.my_study"
 STUDIES = {
+    "c_shape_design": "ngtmc.studies.c_shape_design",
     "contact_gamma0": "ngtmc.studies.contact_gamma0",
     "design_for_contact": "ngtmc.studies.design_for_contact",
     "l_panel": "ngtmc.studies.l_panel",
