@@ -106,13 +106,12 @@ def test_design_loop(tmp_path, monkeypatch):
 
 
 def test_topology_optimisation(tmp_path, monkeypatch):
-    """Filter, projection and MMA (nlopt) on the design loop's plate: the work gained in six
-    evaluations with the projected material within its bound (measured W ratio 1.14329, material
-    0.4894 of the area; one load step per evaluation; 10 s)."""
+    """TopologyOptimisation on a scene of one's own (the cantilever plate): the work gained in
+    eight evaluations and the final design's run, at the volume bound (measured W ratio 1.5395,
+    volume 0.4971, no failed design; one load step per evaluation; 1 s)."""
     pytest.importorskip("nlopt")
     g = _run("11_topology_optimisation.py", tmp_path, monkeypatch)
     res = g["result"]
-    assert res.evaluations == 6
-    assert g["W"] / g["W0"] == pytest.approx(1.14329, rel=1e-3)
-    assert g["material"](res.x)[0] <= 1e-6                     # the design returned is feasible
-
+    assert res.evaluations == 9 and res.shortened == 0
+    assert res.objective / g["W0"] == pytest.approx(1.5395, rel=1e-3)
+    assert res.volume <= 0.5 + 1e-3
