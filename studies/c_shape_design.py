@@ -44,7 +44,11 @@ region and the slot (it acts where rho < 1, through the factor 1 - rho), displac
 
 Results
 -------
-Measured figures: ``studies/records/c_shape_design.json``; the report of a run gives them all.
+At quick the co-designed structure absorbs more energy with fracture on than the contact-only
+optimum, which loses about a third of its own objective when it may break and cracks at the
+corner of the loaded pad, where the co-design keeps its phase field lower; every gradient check
+agrees to better than 1e-4 and no forward run fails. The measured figures are the records of
+``studies/records/c_shape_design.json``; the report of a run gives them all.
 """
 from __future__ import annotations
 
@@ -92,6 +96,10 @@ RESOLUTIONS = {
     "paper": {"h": 0.014, "steps": 20, "evaluations": 200},
 }
 DEFAULT_RESOLUTION = "quick"
+#: unit and meaning of the resolution keys (``ngtmc show c-shape-design``)
+RESOLUTION_PARAMETERS = {"h": ("mm", "element size (3282 design variables at 0.035 mm, 10374 at 0.02 mm)"),
+                         "steps": ("-", "constant load steps over the stroke"),
+                         "evaluations": ("-", "forward runs with their adjoint per optimisation (and the final design's)")}
 REPORT = {"speed_against_error": False}
 
 

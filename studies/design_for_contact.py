@@ -1,4 +1,5 @@
-"""Design for contact: place a little filler in a gap so that a notched beam absorbs more energy.
+"""Design for contact: place a little filler in a gap so that a notched beam absorbs more energy
+(topology optimisation of a whole region, by :mod:`ngtmc.design`: the study ``c_shape_design``).
 
 What this study shows
 ---------------------
@@ -365,8 +366,7 @@ def targets(p: dict) -> list[dict]:
     return []
 
 
-#: Numbers the quick run is checked against (docs/study-interface.md): none, an optimisation demo: no published or measured reference numbers.
-EXPECTED: dict = {}
+EXPECTED: dict = {}   # an optimisation demo: no published or measured reference numbers
 
 
 # ---------------------------------------------------------------------------- optimisation
