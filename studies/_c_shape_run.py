@@ -7,6 +7,7 @@ in N mm and forces in N per mm of thickness."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -82,8 +83,10 @@ def _curve(path) -> dict:
 
 def optimise_case(p: dict, fracture: bool, case, out_dir) -> pd.DataFrame:
     """Optimise with (``fracture``) or without fracture; check the gradient at the initial, gray and
-    final designs; run the final design with fracture on. Returns that run's history, with the
-    results and snapshots in ``attrs`` (docs/study-interface.md)."""
+    final designs; run the final design with fracture on. Writes the final design variables, its
+    physical and pseudo-densities and the design at the end of each stage to
+    ``optimisation_<case>.npz`` in the run folder; returns that run's history, with the results
+    and snapshots in ``attrs`` (docs/study-interface.md)."""
     S = _study()
     opt = S.optimisation(p, fracture)
     dens, ev = opt.density, opt.evaluation
@@ -123,6 +126,9 @@ def optimise_case(p: dict, fracture: bool, case, out_dir) -> pd.DataFrame:
         "curve_as_designed": _curve(as_designed), "designs": designs, "status": res.status,
         **_crack(on),
     }
+    # the design variables, for a rerun or a check of one design (``optimisation_<case>.npz``)
+    np.savez_compressed(Path(out_dir) / f"optimisation_{case.name}.npz", x=res.x, xbar=res.xbar, rho=res.rho,
+                        stage_x=np.array(res.stage_x), design_mask=dens.mask)
     df = on.history.copy()
     df.attrs["results"] = results
     df.attrs["snapshots"] = _snapshots(on, res.rho)

@@ -58,3 +58,5 @@ def test_the_report_shows_designs_checks_and_snapshots(run_dir, meta):
             # the last frame is the final state, whose largest phase field the comparison table gives
             assert z[f"{case}__alpha"][-1].max() == pytest.approx(meta["results"][case]["alpha_max"], abs=1e-12)
             assert z[f"{case}__rho"].size == z[f"{case}__triangles"].shape[0]
+        with np.load(run_dir / f"optimisation_{case}.npz") as d:      # the design, for a rerun
+            assert np.allclose(d["rho"], z[f"{case}__rho"]) and d["x"].size == d["design_mask"].sum()
