@@ -339,14 +339,14 @@ EXPECTED = {
         "xfail": "quick: reload peak measured 23.6 kN against the paper's 7.6 kN (+211 %); medium 20.8 kN "
                  "(+174 %): their first loading stops before the peak, so this is the uncracked panel's peak; "
                  "at the paper's resolution, where the crack runs before the turning point as in the paper, "
-                 "8.83 kN at 6.640 mm (+16.2 %, path following, 2026-12-03; see the study); not the paper's "
+                 "8.83 kN at 6.640 mm (+16.2 %, path following, record paper_path_following_completed); not the paper's "
                  "single-pass scheme: at quick with the turning point past the peak it reloads to 10.16 kN "
                  "against path following's 9.86 kN (+3 %); the element size does not move it (the paper's schedule "
                  "at medium reloads to 8.68 kN, against 8.83 kN at the paper's resolution), the refined band's "
                  "extent does: the crack stops at the band's end (x = 150 mm) by the turning point, and with the "
-                 "band from x = 100 mm it stops there and reloads to 4.34 kN (-43 %; medium, 2026-12-05); with "
+                 "band from x = 100 mm it stops there and reloads to 4.34 kN (-43 %; record medium_path_following_band_left_100); with "
                  "the band over the whole width the crack runs through the panel's width (to x = 4.3 of 250 mm) "
-                 "before 6.3 mm, with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; medium, 2026-12-05), and so it "
+                 "before 6.3 mm, with 98.8 N left, and reloading finds no peak (100.8 N at 7 mm; record medium_path_following_band_left_0), and so it "
                  "does at l0 = 2.375 and 4.75 mm (quick), where the study's band reloads to 5.48 kN (WHOLE_WIDTH): "
                  "the published reload peak needs a crack arrested by its mesh"},
     "first_peak_force": {"case": "main", "quantity": "first_peak_force", "value": 17935.0, "unit": "N", "rel": 0.05,
