@@ -160,6 +160,49 @@ class _Run(RunFolder):
         """The case is complete (computed, or taken over by :meth:`prepare_resume`)."""
         return (self.results.get(case.name) or {}).get("status") == "completed"
 
+    def adopt_scene(self, scene, mesh_info: dict) -> dict:
+        """The run's mesh (the first case's), force unit, thickness and features from a case's
+        ``scene`` and the ``mesh_info`` of its solver; returns the case's own mesh entry."""
+        if self.mesh is None:
+            self.mesh = dict(mesh_info, dim=scene.dim)
+        if self.force_unit is None:
+            self.force_unit = force_unit(scene.dim, scene.thickness)
+            self.thickness = scene.thickness
+        for key, has in (("fracture", scene.has_fracture), ("void", scene.has_void),
+                         ("regulariser", scene.regulariser is not None)):
+            self.features[key] = bool(self.features.get(key, False) or has)
+        return dict(mesh_info)
+
+    def run_own(self, k: int, case: Case):
+        """A case computed by its own ``run(case, out_dir)``: its DataFrame is the history; its
+        ``attrs`` may add results, snapshots and the solver of its final run (docs/study-interface.md)."""
+        self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: {case.label}")
+        t0 = time.perf_counter()
+        df = case.run(case, self.out)
+        extra = dict(getattr(df, "attrs", None) or {})
+        if extra:
+            df.attrs.clear()
+        df = pd.DataFrame(df).copy()
+        if extra.get("solver") is not None:
+            solver = extra["solver"]
+            self.case_meta[case.name] = {"mesh": self.adopt_scene(solver.scene, _mesh_info(solver))}
+        if "step" not in df:
+            df["step"] = np.arange(len(df))
+        if "wall_time" not in df:
+            df["wall_time"] = np.nan
+            df.loc[df.index[-1], "wall_time"] = time.perf_counter() - t0
+        self.rows[case.name] = df.to_dict("records")
+        res = case_results(df)
+        res.update(extra.get("results") or {})
+        res["wall_time_s"] = time.perf_counter() - t0     # the whole case, not a run inside it
+        res["status"] = "completed"
+        self.results[case.name] = res
+        snaparr = {f"{case.name}__{k_}": np.asarray(v) for k_, v in (extra.get("snapshots") or {}).items()}
+        if snaparr:
+            self.snaps[case.name] = snaparr
+        self.save_checkpoint(case, {"rows": self.rows[case.name]}, None, done=True, snaparr=snaparr)
+        self.write_all()
+
     def run_case(self, k: int, case: Case, resume: bool):
 
         ck = self.resume_from.pop(case.name, None)
@@ -168,40 +211,7 @@ class _Run(RunFolder):
             return
 
         if case.run is not None:
-            self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: {case.label}")
-            t0 = time.perf_counter()
-            df = case.run(case, self.out)
-            extra = dict(getattr(df, "attrs", None) or {})   # docs/study-interface.md: results, snapshots, solver
-            if extra:
-                df.attrs.clear()
-            df = pd.DataFrame(df).copy()
-            if extra.get("solver") is not None:    # the mesh, dofs and features of the case's own solver
-                solver = extra["solver"]
-                info = _mesh_info(solver)
-                if self.mesh is None:
-                    self.mesh = dict(info, dim=solver.scene.dim)
-                self.case_meta[case.name] = {"mesh": info}
-                self.force_unit = self.force_unit or force_unit(solver.scene.dim, solver.scene.thickness)
-                self.thickness = self.thickness if self.thickness is not None else solver.scene.thickness
-                for key, has in (("fracture", solver.scene.has_fracture), ("void", solver.scene.has_void),
-                                 ("regulariser", solver.scene.regulariser is not None)):
-                    self.features[key] = bool(self.features.get(key, False) or has)
-            if "step" not in df:
-                df["step"] = np.arange(len(df))
-            if "wall_time" not in df:
-                df["wall_time"] = np.nan
-                df.loc[df.index[-1], "wall_time"] = time.perf_counter() - t0
-            self.rows[case.name] = df.to_dict("records")
-            res = case_results(df)
-            res.update(extra.get("results") or {})
-            res["wall_time_s"] = time.perf_counter() - t0     # the whole case, not a run inside it
-            res["status"] = "completed"
-            self.results[case.name] = res
-            snaparr = {f"{case.name}__{k}": np.asarray(v) for k, v in (extra.get("snapshots") or {}).items()}
-            if snaparr:
-                self.snaps[case.name] = snaparr
-            self.save_checkpoint(case, {"rows": self.rows[case.name]}, None, done=True, snaparr=snaparr)
-            self.write_all()
+            self.run_own(k, case)
             return
 
         self.progress.say(f"case {k + 1}/{len(self.cases)} {case.name}: building the scene ({case.label})")
@@ -213,17 +223,7 @@ class _Run(RunFolder):
         sim = Simulation(scene, case.schedule, case.control, progress=False, **(case.options or {}))
         build_time = time.perf_counter() - t_build
         mesh_info = _mesh_info(sim.solver, serial if self.comm is not None else None)
-        mesh_info["dim"] = scene.dim
-        if self.mesh is None:
-            self.mesh = dict(mesh_info)
-        cm = {"mesh": {k_: v for k_, v in mesh_info.items() if k_ != "dim"}, "setup_time_s": build_time,
-              "threads": _threads()}
-        if self.force_unit is None:
-            self.force_unit = sim.force_unit
-            self.thickness = scene.thickness
-        for key, has in (("fracture", scene.has_fracture), ("void", scene.has_void),
-                         ("regulariser", scene.regulariser is not None)):
-            self.features[key] = bool(self.features.get(key, False) or has)
+        cm = {"mesh": self.adopt_scene(scene, mesh_info), "setup_time_s": build_time, "threads": _threads()}
         # the control the run uses (path following bounds its displacement steps by its own du_max)
         cm["control"] = {a: getattr(sim.control, a) for a in CONTROL_SETTINGS if hasattr(sim.control, a)}
         cm["schedule"] = [float(x) for x in sim.schedule.points]
