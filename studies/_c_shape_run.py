@@ -14,6 +14,7 @@ import pandas as pd
 import ngsolve as ngs
 
 from ngtmc import sensitivities as sens
+from ngtmc.studies._design_optimisation import path_snapshot
 
 #: pixels of a design image along the box's length (its height gets half)
 IMAGE_COLUMNS = 80
@@ -31,37 +32,12 @@ def _full_run(scene, rho, opt):
     return sens.record_path(dataclasses.replace(scene, density=rho), ev.schedule, ev.control, newton=ev.newton)
 
 
-def _vertex_fields(path, n):
-    path.activate(n)
-    s = path.solver
-    mesh = s.mesh
-    pts = np.asarray(mesh.ngmesh.Coordinates())
-    u = np.column_stack([s.u.components[i].vec.FV().NumPy()[:mesh.nv] for i in range(2)])
-    a = np.zeros(mesh.nv) if s.alpha is None else np.asarray(s.alpha(mesh(pts[:, 0], pts[:, 1]))).ravel()
-    return u, np.clip(np.nan_to_num(a), 0.0, 1.0)
-
-
-def _snapshots(path, rho, frames: int = 5) -> dict:
-    mesh = path.solver.mesh
-    pts = np.asarray(mesh.ngmesh.Coordinates())
-    tri = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(np.int64) - 1
-    idx = sorted({int(round(i)) for i in np.linspace(1, path.n_steps, frames)})
-    us, als = zip(*[_vertex_fields(path, n) for n in idx])
-    path.activate()
-    return {"vertices": pts, "triangles": tri, "rho": np.asarray(rho), "loads": path.loads[idx], "u": np.array(us),
-            "alpha": np.array(als)}
-
-
-def _crack(path) -> dict:
-    """Largest phase field of the final state and where it is (mm); none without a phase field."""
-    s = path.solver
-    if s.alpha is None:
-        return {"alpha_max": 0.0, "crack_x": None, "crack_y": None}
-    u, a = _vertex_fields(path, path.n_steps)
-    path.activate()
+def _crack(snapshot: dict) -> dict:
+    """Largest phase field of the last frame of a snapshot (the final state) and where it is (mm)."""
+    a = snapshot["alpha"][-1]
     k = int(np.argmax(a))
-    pts = np.asarray(s.mesh.ngmesh.Coordinates())
-    return {"alpha_max": float(a[k]), "crack_x": float(pts[k, 0]), "crack_y": float(pts[k, 1])}
+    x, y = snapshot["vertices"][k][:2]
+    return {"alpha_max": float(a[k]), "crack_x": float(x), "crack_y": float(y)}
 
 
 def _image(mesh, values, p) -> list:
@@ -112,6 +88,7 @@ def optimise_case(p: dict, fracture: bool, case, out_dir) -> pd.DataFrame:
         if e in res.designs:
             full[dens.mask] = res.designs[e]
             designs[str(e)] = _image(mesh, full, p)
+    snapshot = path_snapshot(on, res.rho, frames=5)
     results = {
         "design_variables": dens.n, "evaluations": res.evaluations, "optimisation_s": res.seconds,
         "forward_s": split["forward_s"], "adjoint_s": split["adjoint_s"],
@@ -124,14 +101,14 @@ def optimise_case(p: dict, fracture: bool, case, out_dir) -> pd.DataFrame:
         "optimisation": {key: [r[key] for r in hist] for key in ("evaluation", "beta", "objective", "volume",
                                                                  "forward_s", "adjoint_s")},
         "curve_as_designed": _curve(as_designed), "designs": designs, "status": res.status,
-        **_crack(on),
+        **_crack(snapshot),
     }
     # the design variables, for a rerun or a check of one design (``optimisation_<case>.npz``)
     np.savez_compressed(Path(out_dir) / f"optimisation_{case.name}.npz", x=res.x, xbar=res.xbar, rho=res.rho,
                         stage_x=np.array(res.stage_x), design_mask=dens.mask)
     df = on.history.copy()
     df.attrs["results"] = results
-    df.attrs["snapshots"] = _snapshots(on, res.rho)
+    df.attrs["snapshots"] = snapshot
     df.attrs["solver"] = on.solver
     return df
 

@@ -152,31 +152,37 @@ def optimise(p: dict, iterations: int | None = None, callback=None):
 
 
 def _vertex_fields(path, n):
-    """u (nv, 2) and alpha (nv,) at the mesh vertices for state n of a path."""
+    """u (nv, 2) and alpha (nv,) at the mesh vertices for state n of a path (alpha 0 without a
+    phase field, and off the regions that may break)."""
     path.activate(n)
     s = path.solver
     mesh = s.mesh
     pts = np.asarray(mesh.ngmesh.Coordinates())
     nv = mesh.nv
     u = np.column_stack([s.u.components[i].vec.FV().NumPy()[:nv] for i in range(2)])
-    # alpha lives on the beam only: evaluate at the vertices (0 off the beam)
-    mp = mesh(pts[:, 0], pts[:, 1])
-    a = np.asarray(s.alpha(mp)).ravel()
+    a = np.zeros(nv) if s.alpha is None else np.asarray(s.alpha(mesh(pts[:, 0], pts[:, 1]))).ravel()
     return u, np.clip(np.nan_to_num(a), 0.0, 1.0)
+
+
+def path_snapshot(path, rho=None, frames: int = 4) -> dict:
+    """The fields of a recorded path (2D) at ``frames`` evenly spaced states, the last one
+    included, in the run-directory snapshot format: vertices, triangles, rho (default the path's),
+    loads (mm), u (mm) and alpha at the vertices."""
+    mesh = path.solver.mesh
+    pts = np.asarray(mesh.ngmesh.Coordinates())
+    tri = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    idx = sorted({int(round(i)) for i in np.linspace(1, path.n_steps, frames)})
+    us, als = zip(*[_vertex_fields(path, n) for n in idx])
+    path.activate()
+    return {"vertices": pts, "triangles": tri, "rho": np.asarray(path.rho if rho is None else rho),
+            "loads": path.loads[idx], "u": np.array(us), "alpha": np.array(als)}
 
 
 def write_snapshots(out, cases: dict, n_frames: int = 4):
     """snapshots.npz in the run-directory format for {case: path} (frames at evenly spaced states)."""
     arrays = {}
     for case, path in cases.items():
-        mesh = path.solver.mesh
-        pts = np.asarray(mesh.ngmesh.Coordinates())
-        tri = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
-        idx = sorted({int(round(i)) for i in np.linspace(1, path.n_steps, n_frames)})
-        us, als = zip(*[_vertex_fields(path, n) for n in idx])
-        arrays.update({f"{case}__vertices": pts, f"{case}__triangles": tri, f"{case}__rho": path.rho,
-                       f"{case}__loads": path.loads[idx], f"{case}__u": np.array(us), f"{case}__alpha": np.array(als)})
-        path.activate()
+        arrays.update({f"{case}__{k}": v for k, v in path_snapshot(path, frames=n_frames).items()})
     write_npz(_FsPath(out) / "snapshots.npz", arrays)
 
 

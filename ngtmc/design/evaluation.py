@@ -73,10 +73,6 @@ class DesignEvaluation:
         self._path = None
         self._last = None
 
-    def scene_of(self, x) -> Scene:
-        """The scene with the density of design ``x``."""
-        return dataclasses.replace(self.scene, density=self.density.rho(x))
-
     def _finite(self, path) -> bool:
         return bool(np.all(np.isfinite(path.forces)))
 

@@ -32,6 +32,7 @@ from ngtmc.design.density import DesignDensity
 from ngtmc.design.evaluation import DesignEvaluation, DesignFailure
 from ngtmc.design.interpolation import Interpolation
 from ngtmc.design.optimiser import mma
+from ngtmc.design.projection import project
 from ngtmc.scene import Scene
 
 __all__ = ["TopologyOptimisation", "TopologyResult"]
@@ -75,6 +76,12 @@ class TopologyResult:
                 "adjoint_per_forward": adj / fwd if fwd > 0 else math.nan}
 
 
+def _entry(r: dict, evaluation: int, stage: int) -> dict:
+    """The history entry of an evaluation ``r`` of :meth:`DesignEvaluation.evaluate`."""
+    return {"evaluation": evaluation, "stage": stage, "beta": r["beta"], "objective": r["value"],
+            **{k: r[k] for k in ("volume", "forward_s", "adjoint_s", "newton_iterations", "steps", "attempts")}}
+
+
 class TopologyOptimisation:
     """Topology optimisation of ``scene`` over the regions ``design`` (see the module docstring).
 
@@ -112,11 +119,9 @@ class TopologyOptimisation:
         self.betas = [float(b) for b in np.atleast_1d(beta)]
         if not self.betas:
             raise ValueError("TopologyOptimisation: beta is empty (give at least one value)")
-        self.density = DesignDensity(scene, design, filter_radius, interpolation, self.betas[0], eta)
         for b in self.betas:   # each value checked by the projection
-            self.density.beta = b
-            self.density.physical(np.full(self.density.n, 0.5))
-        self.density.beta = self.betas[0]
+            project(0.5, b, eta)
+        self.density = DesignDensity(scene, design, filter_radius, interpolation, self.betas[0], eta)
         self.objective = objective if objective is not None else sens.ExternalWork()
         self.evaluation = DesignEvaluation(scene, self.density, schedule, self.objective, control, newton, retries,
                                            **options)
@@ -183,9 +188,7 @@ class TopologyOptimisation:
 
             def objective(xs, stage=stage, beta=beta):
                 r = ev.evaluate(xs)
-                rec = {"evaluation": len(history) + 1, "stage": stage, "beta": beta, "objective": r["value"],
-                       "volume": r["volume"], "forward_s": r["forward_s"], "adjoint_s": r["adjoint_s"],
-                       "newton_iterations": r["newton_iterations"], "steps": r["steps"], "attempts": r["attempts"]}
+                rec = _entry(r, len(history) + 1, stage)
                 history.append(rec)
                 last["x"] = np.array(xs)
                 if len(history) % every == 0:
@@ -217,11 +220,7 @@ class TopologyOptimisation:
             designs[len(history)] = dens.physical(x)
             stage_x.append(x.copy())
         final = ev.evaluate(x)
-        history.append({"evaluation": len(history) + 1, "stage": len(self.betas), "beta": dens.beta,
-                        "objective": final["value"], "volume": final["volume"], "forward_s": final["forward_s"],
-                        "adjoint_s": final["adjoint_s"], "newton_iterations": final["newton_iterations"],
-                        "steps": final["steps"], "attempts": final["attempts"]})
-        self.final_path = final["path"]
+        history.append(_entry(final, len(history) + 1, len(self.betas)))
         return TopologyResult(x=x, xbar=dens.physical(x), rho=dens.rho(x), objective=final["value"],
                               volume=final["volume"], evaluations=len(history), history=history, designs=designs,
                               failures=list(ev.failures), shortened=shortened, seconds=time.perf_counter() - t0,
