@@ -244,7 +244,7 @@ def _options(p: dict) -> dict:
     displacement step with staggered passes (path following's fallback). Measured step counts with
     and without the ceiling: records ``quick_path_following_no_ceiling`` and
     ``medium_monotonic_path_following_ceiling``."""
-    return simulation_options(p)
+    return simulation_options(p, mesh_maxh=float(p["h_far"]))   # the global maxh of build_mesh
 
 
 def cases(p: dict) -> list[Case]:

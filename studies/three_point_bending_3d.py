@@ -203,9 +203,10 @@ def check_parameters(p: dict):
                              f"size the slab is refined to (h_crack or amr_h_void times amr_size_tolerance = "
                              f"{smallest:g} mm); its one layer of prisms is bisected across its triangles only: "
                              "set slab_thickness to at most that")
-    if float(p.get("amr_remesh_maxh", 0.0) or 0.0) > 0:
+    maxh = p.get("amr_remesh_maxh", "auto")
+    if maxh != "auto" and float(maxh or 0.0) > 0:
         raise StudyError("three_point_bending_3d: amr_remesh_maxh > 0 asks for refinement by remeshing, which is "
-                         "2D only; the hemisphere is refined by bisection (amr_remesh_maxh = 0)")
+                         "2D only; the hemisphere is refined by bisection (amr_remesh_maxh = 0 or 'auto')")
     if not float(p["slab_thickness"]) > 0:
         raise StudyError(f"three_point_bending_3d: slab_thickness = {p['slab_thickness']!r} mm must be > 0")
     try:
@@ -273,9 +274,12 @@ def cases(p: dict) -> list[Case]:
                                             du_min=min(float(p["du_min"]), float(p["du_max"])))
         snaps = [x for x in _tpb.SNAPSHOT_LOADS if x <= stop + 1e-12]   # and the last step, as every case
         twin = dict(opts)
-        if opts.get("adapt") is not None and opts["adapt"].corridor == "auto":
-            # the slab (3D) resolves the default corridor to none; its 2D twin refines as it does
-            twin["adapt"] = dataclasses.replace(opts["adapt"], corridor=0.0)
+        if opts.get("adapt") is not None:
+            # the slab (3D) resolves the default corridor and lookahead to none; its 2D twin
+            # refines as it does
+            a = opts["adapt"]
+            twin["adapt"] = dataclasses.replace(a, corridor=0.0 if a.corridor == "auto" else a.corridor,
+                                                buffer_length=0.0 if a.buffer_length == "auto" else a.buffer_length)
         out.append(Case(name="plane_strain_2d", label="2D, plane strain, same mesh in the plane",
                         scene=partial(build_plane_strain_scene, dict(p)), schedule=ngtmc.Schedule.monotonic(stop),
                         control=control, options=twin, snapshot_loads=snaps, cost=1.0))

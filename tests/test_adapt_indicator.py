@@ -277,3 +277,55 @@ def test_remeshed_corridor_refines_its_strip_not_the_coarse_elements_across_its_
           f"beyond it {np.median(fine.h[outside]):.4f} mm (median); target {h} mm")
     assert on_line.any() and np.median(fine.h[on_line]) <= 1.2 * h and fine.h[on_line].max() <= 1.3 * h
     assert outside.any() and np.median(fine.h[outside]) > 2 * h
+
+
+def test_refinement_remeshes_by_default_where_the_study_states_its_maxh():
+    """amr_remesh_maxh = "auto" (the default): remeshing with the global maxh the study states
+    for its 2D mesh (the three-point bending's h_beam, the L-panel's h_far), bisection where it
+    states none (the 3D study, a study file that does not pass one); a number or 0 as given."""
+    from ngtmc.study import StudyError, simulation_options, study_parameters
+    from ngtmc.studies import l_panel, three_point_bending as tpb
+    from ngtmc.studies import three_point_bending_3d as tpb3d
+    assert simulation_options({"h_crack": 0.01}, mesh_maxh=0.2)["adapt"].remesh_maxh == 0.2
+    assert simulation_options({"h_crack": 0.01})["adapt"].remesh_maxh is None
+    assert simulation_options({"h_crack": 0.01, "amr_remesh_maxh": 0}, mesh_maxh=0.2)["adapt"].remesh_maxh is None
+    assert simulation_options({"h_crack": 0.01, "amr_remesh_maxh": "0.3"}, mesh_maxh=0.2)["adapt"].remesh_maxh == 0.3
+    with pytest.raises(StudyError, match="amr_remesh_maxh = 'fine' must be 'auto'"):
+        simulation_options({"h_crack": 0.01, "amr_remesh_maxh": "fine"}, mesh_maxh=0.2)
+    _, p = study_parameters(tpb, "quick", {"h_crack": "0.015", "h_beam": "0.3"})
+    assert tpb.cases(p)[0].options["adapt"].remesh_maxh == 0.3
+    _, p = study_parameters(l_panel, "quick", {"h_crack": "2"})
+    assert {c.options["adapt"].remesh_maxh for c in l_panel.cases(p)} == {25.0}
+    _, p = study_parameters(tpb3d, "quick", {"h_crack": "0.01", "parts": "hemisphere"})
+    assert tpb3d.cases(p)[0].options["adapt"].remesh_maxh is None
+
+
+def test_the_lookahead_auto_is_the_larger_of_2_l0_and_3_h_crack_in_2d_and_none_in_3d():
+    """Adaptivity(buffer_length="auto") (the study setting amr_lookahead's default) resolves for
+    a run to max(LOOKAHEAD_L0 l0, LOOKAHEAD_H h_crack) on a 2D mesh (l0 the fracture regions'
+    mean), to 0 in 3D (with the corridor); a word other than "auto" and a negative distance are
+    refused, also as a study setting."""
+    import ngtmc
+    from ngtmc.adapt import LOOKAHEAD_H, LOOKAHEAD_L0
+    from ngtmc.study import StudyError, simulation_options
+    from scenes import notched_plate
+    assert (LOOKAHEAD_L0, LOOKAHEAD_H) == (2.0, 3.0)
+    solver = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.2, l0=0.05), compile=False)
+    for h_crack, expected in ((0.0125, 0.1), (0.05, 0.15)):   # 2 l0 larger; 3 h_crack larger
+        got = Adaptivity(h_crack=h_crack, buffer_length="auto").resolved(solver)
+        assert got.buffer_length == pytest.approx(expected) and got.corridor == pytest.approx(0.2)
+    assert Adaptivity(h_crack=0.0125, buffer_length=0.05).resolved(solver).buffer_length == 0.05
+    slab = ngtmc.Solver(ngtmc.Scene(ngtmc.extrude(notched_plate(maxh=0.25, h_band=0.25).mesh, 0.1),
+                                    {"plate": ngtmc.Material(210e3, 0.3, 2.7, 0.05)},
+                                    supports=[ngtmc.Support("bottom", x=True, y=True, z=True)],
+                                    load=ngtmc.DisplacementLoad("top", "y"), fracture_regions="plate"),
+                        compile=False)
+    got = Adaptivity(h_crack=0.0125, buffer_length="auto").resolved(slab)
+    assert got.buffer_length == 0.0 and got.corridor == 0.0
+    for bad in ("far", -0.1):
+        with pytest.raises(ValueError, match="buffer_length"):
+            Adaptivity(h_crack=0.025, buffer_length=bad)
+    assert simulation_options({"h_crack": 0.01})["adapt"].buffer_length == "auto"
+    assert simulation_options({"h_crack": 0.01, "amr_lookahead": 0})["adapt"].buffer_length == 0.0
+    with pytest.raises(StudyError, match="amr_lookahead = 'far' must be 'auto'"):
+        simulation_options({"h_crack": 0.01, "amr_lookahead": "far"})

@@ -138,3 +138,14 @@ def test_compare_histories_sees_a_changed_value_and_ignores_the_times():
     assert differing_columns(a, b.assign(force=[0.0, 1.0])) == ["force"]
     assert differing_columns(a, b.iloc[:1]) == ["(rows)"]
     assert differing_columns(a, b.drop(columns="force")) == ["force"]
+
+
+def test_study_settings_variants_are_labelled_sets_of_study_settings():
+    """benchmarks/study_settings.py: "label: key=value ..." -> (label, ["key=value", ...]); a
+    variant without a label or with a word that is not key=value is refused."""
+    from benchmarks.study_settings import parse_variant
+    assert parse_variant("band:") == ("band", [])
+    assert parse_variant("refined: h_band=0.06 h_crack=0.015") == ("refined", ["h_band=0.06", "h_crack=0.015"])
+    for bad in (": h_crack=0.01", "refined: h_crack"):
+        with pytest.raises(ValueError):
+            parse_variant(bad)

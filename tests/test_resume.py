@@ -212,7 +212,7 @@ def test_a_refined_run_recorded_before_the_default_corridor_resumes_without_one(
     from ngtmc.study import resume_parameters, run_description
     from ngtmc.study import load_study
     from ngtmc.study.parameters import DEFAULT_CHANGED, simulation_options, study_parameters
-    assert DEFAULT_CHANGED == {"amr_corridor": 0.0}
+    assert DEFAULT_CHANGED["amr_corridor"] == 0.0
     mod = load_study("three_point_bending")
     res, p = study_parameters(mod, "quick", {"h_crack": 0.015})
     assert p["amr_corridor"] == "auto"
@@ -231,6 +231,37 @@ def test_a_refined_run_recorded_before_the_default_corridor_resumes_without_one(
     _, p_w = study_parameters(mod, "quick", {"h_crack": 0.015, "amr_corridor": 0.1})
     meta_w = run_description(mod, p_w, res, {"h_crack": 0.015, "amr_corridor": 0.1})
     assert resume_parameters(meta_w, mod, None, None, tmp_path)[2]["amr_corridor"] == 0.1
+
+
+def test_a_refined_run_recorded_before_remeshing_by_default_resumes_bisecting(tmp_path):
+    """amr_remesh_maxh's default changed from 0 (bisection) to "auto" (remeshing where the study
+    states its mesh's maxh; DEFAULT_CHANGED): a refined run recorded before, with the setting at 0
+    or not named, resumes bisecting; one recorded after resumes remeshing with the study's maxh."""
+    from ngtmc.study import resume_parameters, run_description
+    from ngtmc.study import load_study
+    from ngtmc.study.parameters import DEFAULT_CHANGED
+    assert DEFAULT_CHANGED["amr_remesh_maxh"] == 0.0
+    mod = load_study("three_point_bending")
+    res, p = study_parameters_of(mod, {"h_crack": 0.015})
+    assert p["amr_remesh_maxh"] == "auto"
+    assert mod.cases(dict(p))[0].options["adapt"].remesh_maxh == float(p["h_beam"]) == 0.25
+    old = dict(p, amr_remesh_maxh=0.0)
+    meta = run_description(mod, old, res, {"h_crack": 0.015})
+    got = resume_parameters(meta, mod, None, None, tmp_path)[2]
+    assert got["amr_remesh_maxh"] == 0.0 and mod.cases(got)[0].options["adapt"].remesh_maxh is None
+    meta["parameters"].pop("amr_remesh_maxh")   # recorded before the setting existed
+    assert resume_parameters(meta, mod, None, None, tmp_path)[2]["amr_remesh_maxh"] == 0.0
+    meta_h = run_description(mod, old, res, {"h_crack": 0.015})
+    meta_h.pop("parameters")                    # only its hash: recorded between the two changes
+    got = resume_parameters(meta_h, mod, None, None, tmp_path)[2]
+    assert got["amr_remesh_maxh"] == 0.0 and got["amr_corridor"] == "auto"
+    meta_new = run_description(mod, p, res, {"h_crack": 0.015})
+    assert resume_parameters(meta_new, mod, None, None, tmp_path)[2]["amr_remesh_maxh"] == "auto"
+
+
+def study_parameters_of(mod, overrides):
+    from ngtmc.study.parameters import study_parameters
+    return study_parameters(mod, "quick", overrides)
 
 
 def test_settings_without_effect_do_not_block_a_resume(tmp_path):

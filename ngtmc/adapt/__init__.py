@@ -7,12 +7,12 @@ carried across non-nested meshes (:mod:`ngtmc.adapt.carried_state`) and the reco
 from ngtmc.adapt.bisection import refine, replay, transfer_history
 from ngtmc.adapt.marking import mark, targets
 from ngtmc.adapt.record import RefinementRecord
-from ngtmc.adapt.settings import CORRIDOR_L0, HISTORY_TRANSFERS, Adaptivity, check_solver, private_scene
+from ngtmc.adapt.settings import CORRIDOR_L0, HISTORY_TRANSFERS, LOOKAHEAD_H, LOOKAHEAD_L0, Adaptivity, check_solver, private_scene
 from ngtmc.scene import centroids, coordinates
 
 from ngtmc.adapt.corridor import corridor_due, corridor_elements, strip
 from ngtmc.adapt.remesh import Remesher, move, remesh_step
 
-__all__ = ["Adaptivity", "CORRIDOR_L0", "HISTORY_TRANSFERS", "mark", "targets", "refine", "replay", "transfer_history",
+__all__ = ["Adaptivity", "CORRIDOR_L0", "HISTORY_TRANSFERS", "LOOKAHEAD_H", "LOOKAHEAD_L0", "mark", "targets", "refine", "replay", "transfer_history",
            "RefinementRecord", "private_scene", "check_solver", "centroids", "coordinates"]
 __all__ += ['Remesher', 'corridor_due', 'corridor_elements', 'move', 'remesh_step', 'strip']

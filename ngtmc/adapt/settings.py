@@ -83,6 +83,20 @@ HISTORY_TRANSFERS = ("max", "linear")
 #: strip, each with its settle, put the run behind.
 CORRIDOR_L0 = 4.0
 
+#: ``buffer_length="auto"`` (the lookahead of a refinement) is the larger of LOOKAHEAD_L0 times
+#: the fracture regions' mean l0 and LOOKAHEAD_H times h_crack, on a 2D mesh with a phase field;
+#: none in 3D (never measured there): it must cover the crack advance of the next steps (a
+#: dissipation step advances it by about l0) and more than a few fine elements. Measured, each
+#: against the band run side by side (docs/adaptivity.md, "What refinement gains now"): the quick
+#: three-point bending remeshed from 0.06 to 0.015 mm (l0 = 0.03 mm) with 0.06 mm took 83 steps
+#: and 456 Newton iterations, peak -0.27 %, 0.85 of the band run's wall time; with none, 114,
+#: 808 and -2.6 % (the crack ran off the fine mesh before the peak); with one coarse element
+#: (the median longest edge of the marked elements), 108, 678 and -0.43 %. The quick L-panel
+#: remeshed from 5 to 2 mm (l0 = 1.19 mm) with 6 mm took 196 steps and 332 iterations in 144 s,
+#: with 2.4 mm 197, 368 and 342 s (a remesh every few steps).
+LOOKAHEAD_L0 = 2.0
+LOOKAHEAD_H = 3.0
+
 
 @dataclass(frozen=True)
 class Adaptivity:
@@ -95,7 +109,9 @@ class Adaptivity:
     mm (None: no refinement of the void). J_threshold: J below which a void element is refined
     (in (0, 1)). buffer: layers of neighbours refined with a marked element (>= 0). buffer_length:
     elements whose centroid is within this distance (mm, >= 0) of a marked element's are refined
-    too (0: none; a lookahead ahead of the crack tip). corridor: half width, mm (>= 0; 0: none),
+    too (0: none, the default; a lookahead ahead of the crack tip), or "auto": the larger of
+    :data:`LOOKAHEAD_L0` l0 and :data:`LOOKAHEAD_H` h_crack on a 2D mesh with a phase field, none
+    in 3D (:meth:`resolved`). corridor: half width, mm (>= 0; 0: none),
     of the corridor refined ahead of a running crack (:mod:`ngtmc.adapt.corridor`), or "auto" (the
     default): :data:`CORRIDOR_L0` times the fracture regions' mean l0 on a 2D mesh, none in 3D
     (:meth:`resolved`; :class:`~ngtmc.simulation.loop.Simulation` resolves it). max_rounds:
@@ -125,7 +141,7 @@ class Adaptivity:
     J_threshold: float = 0.5
     buffer: int = 1
     max_rounds: int = 10
-    buffer_length: float = 0.0
+    buffer_length: float | str = 0.0
     corridor: float | str = "auto"
     size_tolerance: float = 1.0
     remesh_maxh: float | None = None
@@ -147,9 +163,14 @@ class Adaptivity:
             raise ValueError(f"Adaptivity history_fraction = {self.history_fraction!r} is outside (0, 1]")
         if int(self.buffer) != self.buffer or self.buffer < 0:
             raise ValueError(f"Adaptivity buffer = {self.buffer!r} must be an integer >= 0")
-        check_number("Adaptivity buffer_length", self.buffer_length, "mm")
-        if not (math.isfinite(self.buffer_length) and self.buffer_length >= 0):
-            raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r} mm must be finite and >= 0")
+        if isinstance(self.buffer_length, str):
+            if self.buffer_length != "auto":
+                raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r}: a distance in mm (>= 0; 0: none) "
+                                 "or 'auto'")
+        else:
+            check_number("Adaptivity buffer_length", self.buffer_length, "mm")
+            if not (math.isfinite(self.buffer_length) and self.buffer_length >= 0):
+                raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r} mm must be finite and >= 0")
         if isinstance(self.corridor, str):
             if self.corridor != "auto":
                 raise ValueError(f"Adaptivity corridor = {self.corridor!r}: a half width in mm (>= 0; 0: none) or 'auto'")
@@ -175,14 +196,19 @@ class Adaptivity:
         ``corridor`` of "auto" replaced by its half width in mm: :data:`CORRIDOR_L0` times the mean
         l0 of the fracture regions on a 2D mesh; 0 (none) in 3D, where the corridor is a tube
         about a line, not the surface a crack runs in, and was never measured, and on a scene
-        without a phase field."""
-        if self.corridor != "auto":
-            return self
+        without a phase field; and a ``buffer_length`` of "auto" by the larger of
+        :data:`LOOKAHEAD_L0` times that l0 and :data:`LOOKAHEAD_H` times ``h_crack`` in 2D (mm),
+        0 in 3D and without a phase field."""
         import dataclasses
-        width = 0.0
-        if solver.mesh.dim == 2 and solver.alpha is not None:
-            width = CORRIDOR_L0 * Dissipation(solver).fracture_mean(solver.l0)
-        return dataclasses.replace(self, corridor=width)
+        l0 = (Dissipation(solver).fracture_mean(solver.l0)
+              if solver.mesh.dim == 2 and solver.alpha is not None else None)
+        out = self
+        if out.corridor == "auto":
+            out = dataclasses.replace(out, corridor=CORRIDOR_L0 * l0 if l0 is not None else 0.0)
+        if out.buffer_length == "auto":
+            out = dataclasses.replace(out, buffer_length=max(LOOKAHEAD_L0 * l0, LOOKAHEAD_H * out.h_crack)
+                                      if l0 is not None else 0.0)
+        return out
 
     def smallest_size(self) -> float:
         """The smallest longest edge a refined element may keep, mm: the smaller of ``h_crack`` and

@@ -1,7 +1,6 @@
-"""A study run's parameters: one owner of what a run is. The solver settings every study exposes
-(:data:`SOLVER_PARAMETERS`), the resolved parameters of a study at a resolution with ``--set``
-overrides (:func:`study_parameters`), the keywords they give a Simulation
-(:func:`simulation_options`), their table with units for the metadata and the report
+"""A study run's parameters: one owner of what a run is. The resolved parameters of a study at a
+resolution with ``--set`` overrides (:func:`study_parameters`; the solver settings every study
+exposes and the keywords they give a Simulation are :mod:`ngtmc.study.solver_settings`), their table with units for the metadata and the report
 (:func:`parameter_table`), their hashes (:func:`physics_hash`, :func:`parameters_hash`) and the
 check that a resume continues the same run (:func:`resume_parameters`)."""
 from __future__ import annotations
@@ -14,50 +13,14 @@ from types import ModuleType
 
 import numpy as np
 
-from ngtmc.adapt import Adaptivity
-from ngtmc.simulation import SCHEMES, check_stop_after_drop
 from ngtmc.study.contract import StudyError
+from ngtmc.study.solver_settings import SOLVER_PARAMETERS, simulation_options
 from ngtmc.study.run_files import SCHEMA_VERSION, UNITS, git_revision, jsonable, process_info, versions
 
 __all__ = ["SOLVER_PARAMETERS", "INERT_WITHOUT_REFINEMENT", "ADDED_AT_DEFAULT", "DEFAULT_CHANGED", "added_at_default",
            "effective_parameters", "simulation_options", "study_parameters", "guess_unit", "parameter_table",
            "physics_hash", "run_description", "parameters_hash", "resume_parameters", "typed_overrides"]
 
-#: Solver settings a study exposes next to its physics (``**SOLVER_PARAMETERS`` in PARAMETERS):
-#: name -> (default, unit, description). They change cost and, for ``scheme``, the time
-#: discretisation, never the model.
-SOLVER_PARAMETERS = {
-    "scheme": ("single-pass", "-", "solution scheme of a load step: 'single-pass' (paper), 'staggered', 'monolithic' or "
-                                   "'path-following' (monolithic with dissipation control where the crack grows)"),
-    "compile": ("auto", "-", "energy expressions: 'real' (generated C++, about 3x faster assembly, about 3.4 s to compile per expression; "
-                             "falls back to 'symbolic' without a C++ compiler), 'symbolic', 'none', or 'auto' "
-                             "('real' on meshes of 5000 elements or 10000 displacement dofs or more)"),
-    "h_crack": (0.0, "mm", "adaptive refinement during the run (ngtmc.Adaptivity): target element size where the crack "
-                           "is or is about to be, for example l0/4; 0: none (the mesh as the resolution gives it)"),
-    "amr_lookahead": (0.0, "mm", "with h_crack: elements within this distance of those the indicator marks are refined "
-                                 "too (Adaptivity.buffer_length), so that a running crack tip stays on the fine mesh "
-                                 "for several steps"),
-    "amr_corridor": ("auto", "mm", "with h_crack: half width of a corridor refined along the crack's path ahead of "
-                                   "its front at the first refinement after the crack starts to run (the force below 0.95 of its peak; "
-                                   "Adaptivity.corridor), so that the crack runs with fewer refinements; 'auto': 4 l0 "
-                                   "(ngtmc.adapt.CORRIDOR_L0) in 2D, none in 3D; 0: none"),
-    "amr_h_void": (0.0, "mm", "with h_crack: target element size in the void where it is squeezed (J < 0.5; "
-                              "Adaptivity.h_void); 0: the void is not refined"),
-    "amr_size_tolerance": (1.0, "-", "with h_crack: elements are refined while their longest edge exceeds this times "
-                                     "their target (Adaptivity.size_tolerance; 1: the target is a strict bound, and "
-                                     "sizes end between half the target and the target; 1.41: centred on it)"),
-    "amr_remesh_maxh": (0.0, "mm", "with h_crack: refine by generating a new mesh from the geometry (ngtmc.adapt.remesh) "
-                                   "instead of NGSolve's bisection; the global maxh the study's mesh is generated with "
-                                   "(checked: the geometry meshed with it must give the study's mesh again); 0: bisection"),
-    "amr_history_fraction": (1.0, "-", "with h_crack: elements whose history H reaches this fraction of H_c = Gc / (6 l0) "
-                                       "(the level at which AT-2 peaks; Adaptivity.history_fraction) are refined, in "
-                                       "(0, 1]; lower refines earlier, before the crack starts"),
-    "amr_buffer": (1, "-", "with h_crack: layers of neighbours (sharing a vertex) refined with each element the "
-                           "indicator marks (Adaptivity.buffer, an integer >= 0)"),
-    "stop_after_drop": (0.0, "-", "stop each case once its force has fallen below this fraction of its peak, after "
-                                  "the peak (the crack has run; Simulation.stop_after_drop); 0: the whole schedule"),
-}
-_COMPILE = {"real": "real", "symbolic": True, "none": False, "auto": "auto"}
 
 #: Solver settings without any effect while adaptive refinement is off (h_crack = 0), with their
 #: values then: they are left out of the parameter hashes and of the comparison of a resumed run
@@ -78,8 +41,10 @@ ADDED_AT_DEFAULT = {"amr_size_tolerance": 1.0, "stop_after_drop": 0.0, "amr_reme
 #: Settings whose default changed after runs were recorded, with the default those runs had: a
 #: resumed run whose record does not name the setting, or names it at that old default, goes on
 #: with it (:func:`ngtmc.study.parameters.resume_parameters`), not with the new default. amr_corridor:
-#: 0 (none) until 2026-12-06, "auto" (4 l0 in 2D) since.
-DEFAULT_CHANGED = {"amr_corridor": 0.0}
+#: 0 (none) until 2026-12-06, "auto" (4 l0 in 2D) since; amr_remesh_maxh: 0 (bisection) and
+#: amr_lookahead: 0 (none) until 2026-12-07, "auto" (remeshing where the study states its mesh's
+#: maxh; a lookahead of the larger of 2 l0 and 3 h_crack in 2D) since.
+DEFAULT_CHANGED = {"amr_corridor": 0.0, "amr_remesh_maxh": 0.0, "amr_lookahead": 0.0}
 
 
 def added_at_default(mod=None) -> dict:
@@ -108,50 +73,6 @@ def effective_parameters(p: dict, mod=None) -> dict:
         except (TypeError, ValueError):
             return False
     return {k: v for k, v in p.items() if not ((off and k in INERT_WITHOUT_REFINEMENT) or at_default(k, v))}
-
-
-def simulation_options(p: dict) -> dict:
-    """Keyword arguments of :class:`ngtmc.Simulation` from the solver settings in ``p``
-    (see SOLVER_PARAMETERS); raises StudyError on an unknown value."""
-    scheme = p.get("scheme", SOLVER_PARAMETERS["scheme"][0])
-    compile_ = p.get("compile", SOLVER_PARAMETERS["compile"][0])
-    if scheme not in SCHEMES:
-        raise StudyError(f"scheme = {scheme!r} is not one of {', '.join(SCHEMES)}")
-    if compile_ not in _COMPILE:
-        raise StudyError(f"compile = {compile_!r} is not one of {', '.join(_COMPILE)}")
-    out = {"scheme": scheme, "compile": _COMPILE[compile_]}
-    drop = p.get("stop_after_drop", SOLVER_PARAMETERS["stop_after_drop"][0])
-    if not (isinstance(drop, (int, float)) and not isinstance(drop, bool) and drop == 0):
-        try:
-            check_stop_after_drop(drop)
-        except (TypeError, ValueError) as e:
-            raise StudyError(f"{e}; as a study setting, 0 runs the whole schedule") from None
-        out["stop_after_drop"] = float(drop)
-    h_crack = p.get("h_crack", SOLVER_PARAMETERS["h_crack"][0])
-    try:
-        h_crack = float(h_crack)
-    except (TypeError, ValueError):
-        raise StudyError(f"h_crack = {h_crack!r} must be a length in mm (0: no adaptive refinement)") from None
-    if h_crack < 0 or h_crack != h_crack:
-        raise StudyError(f"h_crack = {h_crack!r} mm must be >= 0 (0: no adaptive refinement)")
-    corridor = p.get("amr_corridor", SOLVER_PARAMETERS["amr_corridor"][0])
-    if isinstance(corridor, str) and corridor != "auto":   # checked whether refinement is on or not
-        raise StudyError(f"amr_corridor = {corridor!r} must be 'auto' or a half width in mm (0: none)")
-    if h_crack > 0:
-        try:
-            h_void = float(p.get("amr_h_void", 0.0))
-            maxh = float(p.get("amr_remesh_maxh", 0.0))
-            corridor = p.get("amr_corridor", SOLVER_PARAMETERS["amr_corridor"][0])
-            out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=float(p.get("amr_lookahead", 0.0)),
-                                      corridor=corridor if isinstance(corridor, str) else float(corridor),
-                                      h_void=h_void if h_void > 0 else None,
-                                      size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
-                                      history_fraction=float(p.get("amr_history_fraction", 1.0)),
-                                      buffer=p.get("amr_buffer", 1),
-                                      remesh_maxh=maxh if maxh > 0 else None)
-        except (TypeError, ValueError) as e:
-            raise StudyError(str(e)) from None
-    return out
 
 
 def _type_name(like) -> str:
@@ -354,13 +275,24 @@ def resume_parameters(meta: dict | None, mod, resolution: str | None, overrides:
     recorded = {k: v.get("value") for k, v in (meta.get("parameters") or {}).items() if isinstance(v, dict)}
     # settings whose default changed since: the run goes on with the value it was recorded at (the
     # old default where its record does not name it; with a hash only, where that hash says so)
+    try:
+        refining = float(p.get("h_crack", 0.0) or 0.0) > 0.0
+    except (TypeError, ValueError):
+        refining = True
     changed = {k: old for k, old in DEFAULT_CHANGED.items()
-               if k in p and k not in rec_over and k not in (overrides or {})}
+               if k in p and k not in rec_over and k not in (overrides or {})
+               and (refining or k not in INERT_WITHOUT_REFINEMENT)}   # without refinement they change nothing
     if recorded:
         p.update({k: recorded.get(k, old) for k, old in changed.items()})
-    elif (changed and meta.get("parameters_hash") and meta["parameters_hash"] != parameters_hash(p, mod)
-          and meta["parameters_hash"] == parameters_hash({**p, **changed}, mod)):
-        p.update(changed)
+    elif changed and meta.get("parameters_hash") and meta["parameters_hash"] != parameters_hash(p, mod):
+        # the old defaults the run was recorded with: the subset of them whose hash is the record's
+        # (a run recorded between two changes has the newer default of the first one)
+        names = sorted(changed)
+        for mask in range(1, 2 ** len(names)):
+            old = {k: changed[k] for i, k in enumerate(names) if mask >> i & 1}
+            if meta["parameters_hash"] == parameters_hash({**p, **old}, mod):
+                p.update(old)
+                break
     rec_typed = typed_overrides(p, rec_over)
     if overrides:
         _, p_given = study_parameters(mod, res, overrides)
