@@ -163,21 +163,8 @@ class Adaptivity:
             raise ValueError(f"Adaptivity history_fraction = {self.history_fraction!r} is outside (0, 1]")
         if int(self.buffer) != self.buffer or self.buffer < 0:
             raise ValueError(f"Adaptivity buffer = {self.buffer!r} must be an integer >= 0")
-        if isinstance(self.buffer_length, str):
-            if self.buffer_length != "auto":
-                raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r}: a distance in mm (>= 0; 0: none) "
-                                 "or 'auto'")
-        else:
-            check_number("Adaptivity buffer_length", self.buffer_length, "mm")
-            if not (math.isfinite(self.buffer_length) and self.buffer_length >= 0):
-                raise ValueError(f"Adaptivity buffer_length = {self.buffer_length!r} mm must be finite and >= 0")
-        if isinstance(self.corridor, str):
-            if self.corridor != "auto":
-                raise ValueError(f"Adaptivity corridor = {self.corridor!r}: a half width in mm (>= 0; 0: none) or 'auto'")
-        else:
-            check_number("Adaptivity corridor", self.corridor, "mm")
-            if not (math.isfinite(self.corridor) and self.corridor >= 0):
-                raise ValueError(f"Adaptivity corridor = {self.corridor!r} mm must be finite and >= 0 (or 'auto')")
+        _check_auto_or_length("buffer_length", self.buffer_length, "a distance")
+        _check_auto_or_length("corridor", self.corridor, "a half width")
         check_number("Adaptivity size_tolerance", self.size_tolerance, "-")
         if not (math.isfinite(self.size_tolerance) and self.size_tolerance >= 1.0):
             raise ValueError(f"Adaptivity size_tolerance = {self.size_tolerance!r} must be finite and >= 1")
@@ -215,6 +202,18 @@ class Adaptivity:
         ``h_void`` times ``size_tolerance``. A prism is never bisected along its height, so a
         slab's prisms must be no taller (:func:`check_solver`)."""
         return min(h for h in (self.h_crack, self.h_void) if h is not None) * self.size_tolerance
+
+
+def _check_auto_or_length(name: str, value, what: str):
+    """ValueError unless ``value`` (a setting of :class:`Adaptivity`) is "auto" or a finite length
+    >= 0 in mm; ``what`` names the length in the message."""
+    if isinstance(value, str):
+        if value != "auto":
+            raise ValueError(f"Adaptivity {name} = {value!r}: {what} in mm (>= 0; 0: none) or 'auto'")
+        return
+    check_number(f"Adaptivity {name}", value, "mm")
+    if not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"Adaptivity {name} = {value!r} mm must be finite and >= 0 (or 'auto')")
 
 
 def private_scene(scene):

@@ -74,28 +74,15 @@ def simulation_options(p: dict, mesh_maxh: float | None = None) -> dict:
         raise StudyError(f"h_crack = {h_crack!r} must be a length in mm (0: no adaptive refinement)") from None
     if h_crack < 0 or h_crack != h_crack:
         raise StudyError(f"h_crack = {h_crack!r} mm must be >= 0 (0: no adaptive refinement)")
-    corridor = p.get("amr_corridor", SOLVER_PARAMETERS["amr_corridor"][0])
-    if isinstance(corridor, str) and corridor != "auto":   # checked whether refinement is on or not
-        raise StudyError(f"amr_corridor = {corridor!r} must be 'auto' or a half width in mm (0: none)")
+    corridor = _auto_or_length(p, "amr_corridor", "a half width in mm (0: none)")   # checked whether refinement is on or not
     if h_crack > 0:
+        maxh = _auto_or_length(p, "amr_remesh_maxh", "a global maxh in mm (0: bisection)")
+        if maxh == "auto":
+            maxh = float(mesh_maxh) if mesh_maxh is not None else 0.0
+        lookahead = _auto_or_length(p, "amr_lookahead", "a distance in mm (0: none)")
         try:
             h_void = float(p.get("amr_h_void", 0.0))
-            maxh = p.get("amr_remesh_maxh", SOLVER_PARAMETERS["amr_remesh_maxh"][0])
-            if maxh == "auto":
-                maxh = float(mesh_maxh) if mesh_maxh is not None else 0.0
-            try:
-                maxh = float(maxh)
-            except (TypeError, ValueError):
-                raise StudyError(f"amr_remesh_maxh = {maxh!r} must be 'auto' or a global maxh in mm (0: bisection)") from None
-            corridor = p.get("amr_corridor", SOLVER_PARAMETERS["amr_corridor"][0])
-            lookahead = p.get("amr_lookahead", SOLVER_PARAMETERS["amr_lookahead"][0])
-            if lookahead != "auto":
-                try:
-                    lookahead = float(lookahead)
-                except (TypeError, ValueError):
-                    raise StudyError(f"amr_lookahead = {lookahead!r} must be 'auto' or a distance in mm (0: none)") from None
-            out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=lookahead,
-                                      corridor=corridor if isinstance(corridor, str) else float(corridor),
+            out["adapt"] = Adaptivity(h_crack=h_crack, buffer_length=lookahead, corridor=corridor,
                                       h_void=h_void if h_void > 0 else None,
                                       size_tolerance=float(p.get("amr_size_tolerance", 1.0)),
                                       history_fraction=float(p.get("amr_history_fraction", 1.0)),
@@ -104,3 +91,15 @@ def simulation_options(p: dict, mesh_maxh: float | None = None) -> dict:
         except (TypeError, ValueError) as e:
             raise StudyError(str(e)) from None
     return out
+
+
+def _auto_or_length(p: dict, key: str, what: str):
+    """The setting ``key`` of ``p`` (default: SOLVER_PARAMETERS): "auto", or a number as a float;
+    StudyError naming ``what`` it must be otherwise."""
+    value = p.get(key, SOLVER_PARAMETERS[key][0])
+    if value == "auto":
+        return value
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise StudyError(f"{key} = {value!r} must be 'auto' or {what}") from None
