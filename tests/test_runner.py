@@ -326,9 +326,9 @@ def test_checkpoint_state_by_name_and_the_positional_form_still_loads():
 
 def test_auto_threads_follow_the_mesh_size(monkeypatch):
     """threads="auto" of a serial run: per case, one NGSolve thread below AUTO_TWO_THREADS_ELEMENTS
-    elements (AUTO_TWO_THREADS_ELEMENTS_3D in 3D) in its built scene (a second thread made the
-    quick three-point bending 1.75x slower), two from there; a case whose scene is not built gets
-    one."""
+    elements (AUTO_TWO_THREADS_ELEMENTS_3D in 3D) in its built scene (two runs side by side on two
+    threads each were more than ten times slower than on one each), two from there; a case whose
+    scene is not built gets one."""
     import ngtmc.runner.study_run as runner
     from ngtmc.study import study_parameters
     mod = tiny_study()

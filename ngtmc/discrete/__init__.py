@@ -1,7 +1,8 @@
 """The discrete problem on a mesh: finite-element spaces and integration rules (spaces), the energy
 forms (energy_forms, displacement_energy), the displacement Newton (newton), the phase field and its
-dissipation, boundary conditions, the compiled-code cache, and the Solver that holds one scene's
+dissipation, boundary conditions, the compiled-code cache, the BLAS threads of a step, and the Solver that holds one scene's
 discrete state."""
+from ngtmc.discrete.blas_threads import limited as blas_limited
 from ngtmc.discrete.dissipation import Dissipation
 from ngtmc.discrete.energy_forms import QuadraticPlus, merged_terms
 from ngtmc.discrete.newton import (
@@ -13,6 +14,6 @@ from ngtmc.discrete.spaces import bilinear_form, rules
 
 __all__ = [
     'Dissipation', 'FLOOR_RTOL', 'NewtonOptions', 'NewtonResult', 'QuadraticPlus', 'Solver',
-    'bilinear_form', 'history_pieces', 'lifted_direction', 'meets', 'merged_terms',
+    'bilinear_form', 'blas_limited', 'history_pieces', 'lifted_direction', 'meets', 'merged_terms',
     'phase_field_piece', 'residual_split', 'rules',
 ]

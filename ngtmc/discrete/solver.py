@@ -194,6 +194,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
         self._scratch_guard = ngs.GridFunction(self._guard_irs)
         self.H_committed = np.zeros(self.irs.ndof)
         self._psi_plus_cf = None   # Psi_plus(u), compiled at its first use (psi_plus_values)
+        self._J_cf = None          # det F of u, built at its first use (J_values)
         if frac:
             self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self.regions.fracture_regex))
             self.alpha = ngs.GridFunction(self.fes_a, name="alpha")
@@ -297,7 +298,9 @@ class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
     def J_values(self) -> np.ndarray:
         """det F at the guard quadrature points (dimensionless), element by element; a view of a
         scratch vector that the next call overwrites."""
-        self._scratch_guard.Interpolate(ngs.Det(deformation_gradient(self.u)))
+        if self._J_cf is None:   # built once: building it took about as long as evaluating it
+            self._J_cf = ngs.Det(deformation_gradient(self.u))
+        self._scratch_guard.Interpolate(self._J_cf)
         return self._scratch_guard.vec.FV().NumPy()
 
     @property

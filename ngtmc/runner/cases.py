@@ -11,6 +11,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
+from ngtmc.discrete import blas_limited
 from ngtmc.simulation import Progress, RowCallbacks, force_unit
 from ngtmc.runner.outputs import CheckpointOutput, SnapshotOutput
 from ngtmc.scene import ResolutionWarning
@@ -322,7 +323,7 @@ class _Run(RunFolder):
                 continue
             import ngsolve as ngs
             ngs.SetNumThreads(int(n))
-            with ngs.TaskManager():
+            with ngs.TaskManager(), blas_limited():
                 self.run_case(k, case, resume)
 
     def run(self, resume: bool, meta: dict | None = None, run_cases=None):

@@ -24,6 +24,7 @@ import uuid
 
 import pandas as pd
 
+from ngtmc.discrete import blas_limited
 from ngtmc.study import StudyError
 from ngtmc.runner.cases import _Run
 from ngtmc.runner.folder import case_results
@@ -158,7 +159,7 @@ def compute_case(spec: bytes, name: str, checkpoint: dict | None, threads: int |
         ngs.SetNumThreads(int(threads))
     error = None
     try:
-        with ngs.TaskManager():
+        with ngs.TaskManager(), blas_limited():
             run.run_case(k, case, checkpoint is not None)
     except Exception as e:          # recorded in the checkpoint by run_case; the main process reports it
         error = f"{type(e).__name__}: {e}"

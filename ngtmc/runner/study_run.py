@@ -13,6 +13,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ngtmc.discrete import blas_limited
 from ngtmc.runner.outputs import ReportOutput
 from ngtmc.study import effective_status, read_metadata
 from ngtmc.study import resume_parameters, typed_overrides
@@ -50,12 +51,12 @@ def _latest_run(study: str, resolution: str, base: str | Path = "reports") -> Pa
     return max(cands, key=lambda d: d.stat().st_mtime) if cands else None
 
 
-#: A serial case runs with two NGSolve threads only from this many elements in its mesh.
-#: Measured on the 2-core machine, idle, three-point bending to 0.1 mm (path following, same 94
-#: steps and 459 Newton iterations): quick mesh (8632 elements) 97.7 s with one thread against
-#: 170.5 s with two (the sparse factorization and the block-GMRES solves of a small matrix pay
-#: more for the second thread than they gain); paper mesh (29808 elements) 705 ms per iteration
-#: with two threads (idle) against 839 with one (beside another one-thread job).
+#: A serial case runs with two NGSolve threads only from this many elements in its mesh. Alone,
+#: with numpy's BLAS on one thread (ngtmc.discrete.blas_threads), a second thread pays on the
+#: quick meshes too (quick three-point bending 44.2 against 63.3 s); but two runs side by side
+#: with two threads each on the 2-core machine were more than ten times slower than with one
+#: each (docs/performance.md, "What makes an iteration cheap"), and test suites, benchmarks and
+#: studies are often run side by side: small meshes keep one thread, ``--threads 2`` asks for two.
 AUTO_TWO_THREADS_ELEMENTS = 20000
 
 #: The same threshold for 3D meshes, whose tangents have several times the nonzeros per row.
@@ -251,7 +252,7 @@ def _claimed(mod, res, p, out, typed, comm, root, meta, resume, report, progress
         if parallel:
             run_cases = ParallelCases(run, workers, scheduler, threads)
         try:
-            with _terminate_as_interrupt(), (contextlib.nullcontext() if per_case else ngs.TaskManager()):
+            with _terminate_as_interrupt(), (contextlib.nullcontext() if per_case else ngs.TaskManager()), blas_limited():
                 run.run(resume, meta, run_cases)
         except BaseException:
             # a failed or interrupted run still gets its report (with a status banner): nothing is lost

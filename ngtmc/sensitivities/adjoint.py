@@ -15,6 +15,7 @@ import ngsolve as ngs
 from ngtmc.model import deformation_gradient
 from ngtmc.discrete import rules
 from ngtmc.discrete import Solver
+from ngtmc.discrete import blas_limited
 from ngtmc.sensitivities.objectives import Objective, Seeds
 from ngtmc.sensitivities.path import Path, _all_parameters, _resolve, refuse_changed_mesh
 
@@ -207,6 +208,12 @@ def gradient(path: Path, objective: Objective, wrt: Iterable[str] = ("rho", "E",
     held fixed (see the module docstring). Only the solver's fields are changed; the solver is
     left in the final state of the path. A path of a monolithic scheme is differentiated by
     :func:`ngtmc.sensitivities.coupled.coupled_gradient`."""
+    with blas_limited():   # numpy's and scipy's BLAS on one thread (ngtmc.discrete.blas_threads)
+        return _gradient(path, objective, wrt)
+
+
+def _gradient(path: Path, objective: Objective, wrt) -> dict:
+    """:func:`gradient` (its BLAS threads limited by the caller)."""
     refuse_changed_mesh(path.solver)
     if getattr(path, "coupled", None) is not None:
         return path.gradient(objective, wrt)          # CoupledPath.gradient

@@ -27,7 +27,7 @@ from ngtmc.stepping import N_S as PATH_N_S
 from ngtmc.simulation.history import HISTORY_UNITS as _HISTORY_UNITS, peak, peak_index
 from ngtmc.scene import Scene
 from ngtmc.stepping import PATH_STEPS, SCHEMES, StepSchemes
-from ngtmc.discrete import NewtonOptions, Solver
+from ngtmc.discrete import NewtonOptions, Solver, blas_limited
 from ngtmc.simulation.records import RunRecords
 from ngtmc.simulation.refine import RunRefinement
 from ngtmc.simulation.state import RunState
@@ -247,9 +247,14 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
     # ------------------------------------------------------------------ one step
 
     def advance(self) -> dict:
-        """Take one accepted step (with cut-backs as needed); return its history row.
+        """Take one accepted step (with cut-backs as needed); return its history row. numpy's and
+        scipy's BLAS run on one thread meanwhile (:mod:`ngtmc.discrete.blas_threads`).
 
         Raises StepFailure when the step fails at the minimum increment."""
+        with blas_limited():
+            return self._advance()
+
+    def _advance(self) -> dict:
         if self._t_start is None:
             self._t_start = time.perf_counter()
         s = self.solver
