@@ -18,9 +18,6 @@ and the secant's alpha; ``pf+u``: ``pf`` then the displacement solved at that al
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
-import json
-from pathlib import Path
 import sys
 
 import numpy as np
@@ -30,9 +27,8 @@ from ngtmc.coupled.iteration import Iteration
 from ngtmc.simulation import Simulation
 from ngtmc.study import load_study, study_parameters
 
-from .run import machine_info, _git
-
-RESULTS = Path(__file__).resolve().parent / "results"
+from .run import machine_info
+from .study_process import RESULTS, git_state, git_text, stamp, write_record
 
 
 class _Probe(Iteration):
@@ -164,17 +160,11 @@ def main(argv=None) -> int:
             print(f"[first-direction] step {entry['step']}: {entry.get('iterations', '-')} iterations", flush=True)
     finally:
         M.CoupledNewton.solve = solve
-    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    when = stamp()
     cmd = "python -m benchmarks.first_direction " + " ".join(sys.argv[1:] if argv is None else argv)
-    record = {"command": cmd, "time": stamp, "git": {"revision": _git("rev-parse", "HEAD"),
-                                                     "dirty": bool(_git("status", "--porcelain"))},
-              "machine": machine_info(), "steps": steps}
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    name = f"{args.study}-{args.resolution}-{stamp}-first-direction"
-    (out / f"{name}.json").write_text(json.dumps(record, indent=1, default=float))
-    lines = [f"### First Newton directions of path-following steps ({stamp})", "", f"`{cmd}`", "",
-             f"git {record['git']['revision']}{' (dirty)' if record['git']['dirty'] else ''}. Load errors in mm "
+    record = {"command": cmd, "time": when, "git": git_state(), "machine": machine_info(), "steps": steps}
+    lines = [f"### First Newton directions of path-following steps ({when})", "", f"`{cmd}`", "",
+             f"{git_text(record)}. Load errors in mm "
              "against the step's converged load; u error relative to the step's own u change.", ""]
     for e in steps:
         if "family" not in e:
@@ -192,8 +182,8 @@ def main(argv=None) -> int:
             lines.append(f"| {v['predictor']} | {v['converged']} | {v['iterations']} | {v['displacement_iterations']} | "
                          f"{v['alpha_difference']:.1e} |")
         lines.append("")
-    (out / f"{name}.md").write_text("\n".join(lines) + "\n")
-    print(f"written {out / name}.json and .md")
+    write_record(args.out, f"{args.study}-{args.resolution}-{when}-first-direction", record, lines, shown=None,
+                 default=float)
     return 0
 
 

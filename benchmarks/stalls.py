@@ -16,20 +16,15 @@ run failed, 0 otherwise: a step over the limit is a finding, not a failure of th
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
-import json
 from pathlib import Path
 import shlex
-import subprocess
 import sys
 import tempfile
-import time
 
 import pandas as pd
 
-from .run import machine_info, _git
-
-RESULTS = Path(__file__).resolve().parent / "results"
+from .run import machine_info
+from .study_process import RESULTS, cell, git_state, git_text, run_study, stamp, write_record
 
 #: a step that needs more Newton iterations than this stalls (the target of no stall)
 LIMIT = 20
@@ -80,7 +75,7 @@ def main(argv=None) -> int:
     if args.limit < 1:
         ap.error(f"--limit {args.limit} must be at least 1")
     cmd = "python -m benchmarks.stalls " + shlex.join(list(sys.argv[1:] if argv is None else argv))
-    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    when = stamp()
     runs, failed = [], False
     if args.folders:
         for f in args.folders:
@@ -97,37 +92,26 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             for name in names:
                 folder = Path(tmp) / name
-                run_cmd = [sys.executable, "-m", "ngtmc", "run", name, "-r", args.resolution, "-o", str(folder),
-                           "--threads", str(args.threads), "--no-vtk", "--no-report", "--quiet"]
-                print(f"[stalls] {shlex.join(run_cmd[1:])}", flush=True)
-                t0 = time.perf_counter()
-                proc = subprocess.run(run_cmd, capture_output=True, text=True)
-                entry = {"study": name, "returncode": proc.returncode, "command_s": time.perf_counter() - t0,
-                         "cases": tabulate(folder, args.limit, name) if folder.is_dir() else []}
-                if proc.returncode != 0:
-                    failed = True
-                    entry["stderr_tail"] = proc.stderr[-2000:]
+                print(f"[stalls] ngtmc run {name} -r {args.resolution}", flush=True)
+                entry = {"study": name, **run_study(name, args.resolution, folder, args.threads)}
+                entry["cases"] = tabulate(folder, args.limit, name) if folder.is_dir() else []
+                failed |= entry["returncode"] != 0
                 runs.append(entry)
                 for c in entry["cases"]:
                     print(f"[stalls] {name} {c['run']} {c['case']}: {c['steps']} steps, {c['newton_iterations']} "
                           f"Newton, at most {c['max_step_newton']} in a step, {c['steps_over_limit']} over "
                           f"{args.limit}", flush=True)
     record = {"command": cmd, "resolution": args.resolution, "limit": args.limit, "threads": args.threads,
-              "time": stamp, "git": {"revision": _git("rev-parse", "HEAD"), "dirty": bool(_git("status", "--porcelain"))},
-              "machine": machine_info(), "runs": runs}
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    name = f"stalls-{args.resolution}-{stamp}"
-    (out / f"{name}.json").write_text(json.dumps(record, indent=1, default=str))
-    lines = [f"### Stalls across the studies, {args.resolution} ({stamp})", "", f"`{cmd}`", "",
-             f"git {record['git']['revision']}{' (dirty)' if record['git']['dirty'] else ''}, {args.threads} "
+              "time": when, "git": git_state(), "machine": machine_info(), "runs": runs}
+    lines = [f"### Stalls across the studies, {args.resolution} ({when})", "", f"`{cmd}`", "",
+             f"{git_text(record)}, {args.threads} "
              f"thread(s), one run at a time. A step stalls when it needs more than {args.limit} Newton "
              "iterations over all its attempts.", "",
              f"| study | run | case | steps | Newton | cut-backs | most in a step | at step (load mm) | steps over {args.limit} | command s | status |",
              "|:---|:---|:---|---:|---:|---:|---:|:---|---:|---:|:---|"]
     for r in runs:
         status = "ok" if r["returncode"] == 0 else "failed"
-        cs = f"{r['command_s']:.0f}" if r["command_s"] is not None else "-"
+        cs = cell(r["command_s"], ".0f")
         if not r["cases"]:
             lines.append(f"| {r['study']} | - | - | - | - | - | - | - | - | {cs} | {status} |")
         for c in r["cases"]:
@@ -135,9 +119,7 @@ def main(argv=None) -> int:
             lines.append(f"| {c['study']} | {c['run'] or '.'} | {c['case']} | {c['steps']} | {c['newton_iterations']} | "
                          f"{c['cutbacks'] if c['cutbacks'] is not None else '-'} | {c['max_step_newton']} | {at} | "
                          f"{c['steps_over_limit']} | {cs} | {status} |")
-    (out / f"{name}.md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines[6:]))
-    print(f"written {out / name}.json and .md")
+    write_record(args.out, f"stalls-{args.resolution}-{when}", record, lines)
     return 1 if failed else 0
 
 

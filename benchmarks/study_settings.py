@@ -16,19 +16,13 @@ them only within one record. Exit status 1 when a run failed.
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
-import json
 from pathlib import Path
 import shlex
-import subprocess
 import sys
 import tempfile
-import time
 
-from .compare_histories import summary
-from .run import machine_info, _git
-
-RESULTS = Path(__file__).resolve().parent / "results"
+from .run import machine_info
+from .study_process import RESULTS, cell, git_state, git_text, run_study, stamp, summary_of, write_record
 
 
 def parse_variant(text: str) -> tuple[str, list[str]]:
@@ -56,27 +50,16 @@ def main(argv=None) -> int:
     except ValueError as e:
         ap.error(str(e))
     cmd = "python -m benchmarks.study_settings " + shlex.join(list(sys.argv[1:] if argv is None else argv))
-    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    when = stamp()
     runs, failed = [], False
     with tempfile.TemporaryDirectory() as tmp:
         for label, sets in variants:
             folder = Path(tmp) / label
-            run_cmd = [sys.executable, "-m", "ngtmc", "run", args.study, "-r", args.resolution, "-o", str(folder),
-                       "--threads", str(args.threads), "--no-vtk", "--no-report", "--quiet"]
-            for s in sets:
-                run_cmd += ["--set", s]
-            print(f"[settings] {label}: {shlex.join(run_cmd[1:])}", flush=True)
-            t0 = time.perf_counter()
-            proc = subprocess.run(run_cmd, capture_output=True, text=True)
-            wall = time.perf_counter() - t0
-            entry = {"label": label, "settings": sets, "command_s": wall, "returncode": proc.returncode}
-            if (folder / "history.csv").exists():
-                s = summary(folder)
-                s.pop("run", None)
-                entry.update(s)
-            if proc.returncode != 0:
-                failed = True
-                entry["stderr_tail"] = proc.stderr[-2000:]
+            print(f"[settings] {label}: {' '.join(sets) or '(defaults)'}", flush=True)
+            entry = {"label": label, "settings": sets,
+                     **run_study(args.study, args.resolution, folder, args.threads, sets)}
+            entry.update(summary_of(folder))
+            failed |= entry["returncode"] != 0
             runs.append(entry)
             print(f"[settings] {label}: " + ", ".join(f"{k} {entry.get(k)}" for k in
                                                       ("steps", "newton_iterations", "cutbacks", "peak_force",
@@ -86,29 +69,19 @@ def main(argv=None) -> int:
         p = r.get("peak_force")
         r["peak_vs_first_pct"] = None if (p is None or not ref) else 100.0 * (p - ref) / abs(ref)
     record = {"command": cmd, "study": args.study, "resolution": args.resolution, "threads": args.threads,
-              "time": stamp, "git": {"revision": _git("rev-parse", "HEAD"), "dirty": bool(_git("status", "--porcelain"))},
-              "machine": machine_info(), "runs": runs}
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    name = f"{args.study.replace('-', '_')}-{args.resolution}-{stamp}-settings"
-    (out / f"{name}.json").write_text(json.dumps(record, indent=1, default=str))
+              "time": when, "git": git_state(), "machine": machine_info(), "runs": runs}
     unit = runs[0].get("force_unit", "N")
-    lines = [f"### {args.study}, {args.resolution}: study settings side by side ({stamp})", "",
-             f"`{cmd}`", "", f"git {record['git']['revision']}{' (dirty)' if record['git']['dirty'] else ''}, "
-             f"{args.threads} thread(s) per run, one run at a time", "",
+    lines = [f"### {args.study}, {args.resolution}: study settings side by side ({when})", "",
+             f"`{cmd}`", "", f"{git_text(record)}, {args.threads} thread(s) per run, one run at a time", "",
              f"| label | settings | steps | Newton | cut-backs | peak {unit} | at mm | peak vs first % | run s | command s | status |",
              "|:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|:---|"]
     for r in runs:
-        def f(k, spec):
-            v = r.get(k)
-            return "-" if v is None else format(v, spec)
-        lines.append(f"| {r['label']} | {' '.join(r['settings']) or '(defaults)'} | {f('steps', 'd')} | "
-                     f"{f('newton_iterations', 'd')} | {f('cutbacks', 'd')} | {f('peak_force', '.3f')} | "
-                     f"{f('peak_load_mm', '.5f')} | {f('peak_vs_first_pct', '+.2f')} | {f('wall_time_s', '.1f')} | "
-                     f"{f('command_s', '.1f')} | {'ok' if r['returncode'] == 0 else 'failed'} |")
-    (out / f"{name}.md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines[6:]))
-    print(f"written {out / name}.json and .md")
+        lines.append(f"| {r['label']} | {' '.join(r['settings']) or '(defaults)'} | {cell(r.get('steps'), 'd')} | "
+                     f"{cell(r.get('newton_iterations'), 'd')} | {cell(r.get('cutbacks'), 'd')} | "
+                     f"{cell(r.get('peak_force'), '.3f')} | {cell(r.get('peak_load_mm'), '.5f')} | "
+                     f"{cell(r.get('peak_vs_first_pct'), '+.2f')} | {cell(r.get('wall_time_s'), '.1f')} | "
+                     f"{cell(r.get('command_s'), '.1f')} | {'ok' if r['returncode'] == 0 else 'failed'} |")
+    write_record(args.out, f"{args.study.replace('-', '_')}-{args.resolution}-{when}-settings", record, lines)
     return 1 if failed else 0
 
 
