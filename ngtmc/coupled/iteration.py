@@ -166,27 +166,44 @@ class Iteration:
     # ------------------------------------------------------------------ directions
     def direction(self, lin, free, fixed_step, a_cur, g):
         """Newton (or Levenberg) direction (dx, dlambda) from the factorization ``lin``; None
-        when the damage does not respond to the load (path following)."""
+        when the damage does not respond to the load (path following). Under dissipation control
+        the bordered system is solved in one GMRES where ``lin`` offers it (``lin.bordered``),
+        else, or where that fails, as two systems."""
         n, s, nu = self.n, self.s, self.nu
         w, tmp, dx = self.w, self.tmp, self.dx
         wN = w.FV().NumPy()
         wN[:] = fixed_step
         tmp.data = self.r + n.form.mat * w
-        lin(tmp, dx)
-        dxN = np.where(free, -dx.FV().NumPy(), fixed_step)
-        dlam = 0.0
         if self.path:
             # response to a unit load change: the boundary values move by d target / d lambda
             lam = self.lam
             h = 1e-6 * max(abs(lam), 1e-3)
             dt_dl = (s.dirichlet_target(lam + h) - s.dirichlet_target(lam - h)) / (2 * h)
-            wN[:] = 0.0
-            wN[:nu] = np.where(self.dir_u, dt_dl, 0.0)
-            unit = wN.copy()
+            unit = np.zeros_like(fixed_step)
+            unit[:nu] = np.where(self.dir_u, dt_dl, 0.0)
+            grad = n.D.gradient(a_cur)
+            if getattr(lin, "bordered", None) is not None:
+                tN = tmp.FV().NumPy()
+                r = np.where(free, tN, 0.0)
+                wN[:] = unit
+                tmp.data = n.form.mat * w
+                c = np.zeros_like(fixed_step)
+                c[nu:] = np.where(free[nu:], grad, 0.0)
+                if not c.any():   # every alpha dof with a gradient held: the two solves' slope is 0 too
+                    return None
+                out = lin.bordered(r, np.where(free, tN, 0.0), c,
+                                   g + float(grad @ np.where(free[nu:], 0.0, fixed_step[nu:])))
+                if out is not None:
+                    return np.where(free, -out[0], fixed_step + out[1] * unit), out[1]
+                tN[:] = r   # the two systems instead (their solve ignores the dofs that are not free)
+        lin(tmp, dx)
+        dxN = np.where(free, -dx.FV().NumPy(), fixed_step)
+        dlam = 0.0
+        if self.path:
+            wN[:] = unit
             tmp.data = n.form.mat * w
             lin(tmp, w)
             bN = np.where(free, -w.FV().NumPy(), unit)
-            grad = n.D.gradient(a_cur)
             slope = self.ranks.sum(float(grad @ bN[nu:]))
             if not abs(slope) > 0.0:
                 return None

@@ -25,6 +25,9 @@ import time
 import numpy as np
 import ngsolve as ngs
 
+from ngtmc.coupled.bordered import bordered_gmres, numpy_operator
+from ngtmc.coupled.settings import BORDERED, FACTOR_REUSE
+
 __all__ = ["CoupledLinearSolver", "LINEAR_SOLVERS"]
 
 #: Linear solvers of the coupled tangent: "block-gmres" (GMRES preconditioned by the block lower
@@ -39,21 +42,6 @@ LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
 #: residual larger than the right-hand side (the MPI test scene's stall, docs/performance.md).
 GMRES_TRUE_RTOL = 1e-4
 
-#: Reuse of the u-u factor of block-GMRES across Newton directions ("rent or buy"): GMRES always
-#: solves the current tangent, so an older factor is only a poorer preconditioner. With reuse on,
-#: a direction keeps the factor if the GMRES time spent with it beyond the iterations of its first
-#: solve (those extra iterations times the measured time per iteration), plus what the next
-#: direction is expected to add, stays below the measured time of its factorization. The next
-#: direction is expected to add what the last reused one did, or, for the first reuse of a
-#: factor, what the first reuse of the factors before it did (learned during the run: where one
-#: reuse already costs more than a factorization, as in 2D, factors are not reused). A Levenberg
-#: (shifted) direction always makes a new factor, and a solve that fails with an older factor is
-#: repeated with a new one before UMFPACK. The choice is per run: ``coupled={"factor_reuse": ...}``
-#: (True, False or "auto"). "auto", the default, reuses on 3D meshes only, as measured
-#: (docs/performance.md, "Reusing the u-u factor while it pays"): in 3D a factorization costs
-#: 35 to 68 triangular solves (medium and paper hemisphere), in 2D a reused factor's extra GMRES
-#: iterations cost more than the factorization they save.
-FACTOR_REUSE = "auto"
 
 
 class CoupledLinearSolver:
@@ -61,6 +49,7 @@ class CoupledLinearSolver:
     them). ``linear_solver``: one of LINEAR_SOLVERS; ``gmres_rtol``, ``gmres_maxsteps``: of
     block-GMRES; ``factor_reuse``: keep block-GMRES's u-u factor while it pays
     (:data:`FACTOR_REUSE`; :class:`~ngtmc.coupled.monolithic.CoupledNewton` resolves its "auto").
+    ``bordered``: one GMRES for the bordered system of path following (:data:`BORDERED`).
     :attr:`gmres_iterations` lists the GMRES iterations of each solve."""
 
     @staticmethod
@@ -73,10 +62,17 @@ class CoupledLinearSolver:
             raise ValueError(f"gmres_rtol = {gmres_rtol!r} must be in (0, 1)")
 
     def __init__(self, form, nu: int, linear_solver: str = "block-gmres", gmres_rtol: float = 1e-8,
-                 gmres_maxsteps: int = 100, ranks=None, factor_reuse: bool = False):
+                 gmres_maxsteps: int = 100, ranks=None, factor_reuse: bool = False, bordered: bool = True):
         self.check(linear_solver, gmres_rtol)
         if not isinstance(factor_reuse, bool):
             raise ValueError(f"factor_reuse = {factor_reuse!r} must be True or False")
+        if not isinstance(bordered, bool):
+            raise ValueError(f"bordered = {bordered!r} must be True or False")
+        #: block-GMRES solves the bordered system of path following in one run (BORDERED); the
+        #: solves so made, and those that failed their check and were made as two systems
+        self.bordered = bordered
+        self.bordered_solves = 0
+        self.bordered_fallbacks = 0
         self.form = form
         #: reductions over MPI ranks (:class:`ngtmc.scene.distributed.Ranks`; None or serial: one process)
         self.ranks = ranks
@@ -90,6 +86,8 @@ class CoupledLinearSolver:
         #: or GMRES did not converge in ``gmres_maxsteps`` (with a new u-u factor, when reused)
         self.inexact_solves = 0
         self._inv_u = None
+        self._inv_a = None
+        self._inv_a_key = (None, np.zeros(0, dtype=bool))
         self._diag = None  # (positions in the matrix values, rows) of the diagonal entries
         #: keep the u-u factor while it pays (FACTOR_REUSE); counts of the factors made and reused
         self.factor_reuse = factor_reuse
@@ -218,9 +216,7 @@ class CoupledLinearSolver:
             self._u_count += 1
         else:
             self._new_u_factor(free, shifted)
-        fa = free.copy()
-        fa[:nu] = False
-        inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
+        inv_a = self._alpha_factor(free)
         op = Masked(A, free, diagonal_shift)
         pre = _BlockLower(A, self._inv_u, inv_a)
         direct = []
@@ -231,6 +227,14 @@ class CoupledLinearSolver:
             with self._diagonal_added(diagonal_shift) if diagonal_shift is not None else contextlib.nullcontext():
                 return A.Inverse(ngs.BitArray(free.tolist()), inverse="umfpack")
 
+        def book(its, t0):
+            """Count a GMRES run of ``its`` iterations begun at ``t0`` (the reuse rule's prices)."""
+            self.gmres_iterations.append(its)
+            if self._u_base is None:
+                self._u_base = its
+            elif its > self._u_base:   # the older factor's price: its extra iterations
+                self._u_extra += (its - self._u_base) * (time.perf_counter() - t0) / its
+
         def gmres(rhs):
             """GMRES on the current factors: (solution, whether it failed)."""
             t0 = time.perf_counter()
@@ -238,11 +242,7 @@ class CoupledLinearSolver:
                              printrates=False)
             sol = gm.Solve(rhs=rhs)
             its = gm.iterations
-            self.gmres_iterations.append(its)
-            if self._u_base is None:
-                self._u_base = its
-            elif its > self._u_base:   # the older factor's price: its extra iterations
-                self._u_extra += (its - self._u_base) * (time.perf_counter() - t0) / its
+            book(its, t0)
             bad = its >= self.gmres_maxsteps or not np.all(np.isfinite(sol.FV().NumPy()))
             if not bad:
                 check.data = op * sol
@@ -269,7 +269,40 @@ class CoupledLinearSolver:
                 direct.append(direct_inverse())
                 sol.data = direct[0] * rhs
             out.data = sol
+
+        def bordered(r, t, c, h):
+            """(p, dlambda) of the bordered system of path following in one GMRES
+            (:func:`ngtmc.coupled.bordered.bordered_gmres`; arrays over all dofs, zero where not
+            free), or None: then the caller solves the two systems with ``solve``."""
+            if direct:
+                return None
+            t0 = time.perf_counter()
+            out = bordered_gmres(numpy_operator(op), numpy_operator(pre), r, t, c, h,
+                                 self.gmres_rtol, self.gmres_maxsteps, GMRES_TRUE_RTOL)
+            if out is None:
+                self.bordered_fallbacks += 1
+                return None
+            book(out[2], t0)
+            self.bordered_solves += 1
+            return out[0], out[1]
+        if self.bordered:
+            solve.bordered = bordered
         return solve
+
+    def _alpha_factor(self, free: np.ndarray):
+        """The sparse Cholesky factor of the alpha-alpha block on the free alpha dofs of ``free``:
+        the last one updated where the free set and the matrix are the same (its symbolic step
+        kept: 6 against 21 ms at the paper three-point bending), else a new one."""
+        A = self.form.mat
+        fa = free.copy()
+        fa[:self.nu] = False
+        key = self._inv_a_key
+        if self._inv_a is not None and key[0] is A and key[1].shape == fa.shape and np.array_equal(key[1], fa):
+            self._inv_a.Update()
+        else:
+            self._inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
+            self._inv_a_key = (A, fa)
+        return self._inv_a
 
     def _new_u_factor(self, free: np.ndarray, shifted: bool):
         """A new sparse Cholesky factor of the u-u block of the matrix's current values (its

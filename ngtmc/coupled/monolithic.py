@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
-from ngtmc.coupled.linear import FACTOR_REUSE, LINEAR_SOLVERS, CoupledLinearSolver
+from ngtmc.coupled.linear import LINEAR_SOLVERS, CoupledLinearSolver
 from ngtmc.discrete import Dissipation
 from ngtmc.discrete import bilinear_form
 from ngtmc.discrete import QuadraticPlus, merged_terms
@@ -44,7 +44,7 @@ from ngtmc.discrete import history_pieces, phase_field_piece
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
 from ngtmc.coupled.iteration import Iteration
-from ngtmc.coupled.settings import COUPLED_RTOL, WEAK_STOP
+from ngtmc.coupled.settings import BORDERED, COUPLED_RTOL, FACTOR_REUSE, WEAK_STOP
 
 
 class CoupledNewton:
@@ -56,12 +56,12 @@ class CoupledNewton:
     default: COUPLED_RTOL) times the reaction scale plus its atol, and the phase-field
     complementarity residual below ``alpha_tol`` (None, the default: the same as that rtol) times
     the residual of a uniform unit alpha (dimensionless); ``max_iterations``: per attempt;
-    ``linear_solver``, ``gmres_rtol``, ``gmres_maxsteps``, ``factor_reuse``: of the linear solves
+    ``linear_solver``, ``gmres_rtol``, ``gmres_maxsteps``, ``factor_reuse``, ``bordered``: of the linear solves
     (:class:`~ngtmc.coupled.linear.CoupledLinearSolver`)."""
 
     def __init__(self, solver, alpha_tol: float | None = None, max_iterations: int = 15, linear_solver: str = "block-gmres",
                  gmres_rtol: float = 1e-8, gmres_maxsteps: int = 100, weak_stop: bool = WEAK_STOP,
-                 factor_reuse: bool = FACTOR_REUSE):
+                 factor_reuse: bool = FACTOR_REUSE, bordered: bool = BORDERED):
         if solver.alpha is None:
             raise ValueError("CoupledNewton needs a scene with fracture regions (no phase field to couple)")
         if solver._tractions:
@@ -70,7 +70,10 @@ class CoupledNewton:
         CoupledLinearSolver.check(linear_solver, gmres_rtol)  # before the (costly) form
         if not (isinstance(factor_reuse, bool) or factor_reuse == "auto"):
             raise ValueError(f"coupled factor_reuse = {factor_reuse!r} must be True, False or 'auto' (3D meshes only)")
-        #: keep block-GMRES's u-u factor while it pays (:data:`ngtmc.coupled.linear.FACTOR_REUSE`)
+        if not isinstance(bordered, bool):
+            raise ValueError(f"coupled bordered = {bordered!r} must be True or False")
+        self.bordered = bordered
+        #: keep block-GMRES's u-u factor while it pays (:data:`ngtmc.coupled.settings.FACTOR_REUSE`)
         self.factor_reuse = solver.mesh.dim == 3 if factor_reuse == "auto" else factor_reuse
         #: solves accepted at the residual floor (the solver's ``floor_rtol``, shared with the
         #: displacement Newton; None: never, as in the adjoint's recordings), and their largest
@@ -128,7 +131,7 @@ class CoupledNewton:
         self._free_base[:self.nu] = s._free_np  # vertex conditions live in the solver's mask
         #: factorizations of the assembled tangent (:mod:`ngtmc.coupled.linear`)
         self.lin = CoupledLinearSolver(self.form, self.nu, self.linear_solver, *self._gmres, ranks=s.ranks,
-                                       factor_reuse=self.factor_reuse)
+                                       factor_reuse=self.factor_reuse, bordered=self.bordered)
         self._r = self.x.vec.CreateVector()
         self._rc = self.x.vec.CreateVector()  # MPI: a residual with its ranks' parts summed
         self._dx = self.x.vec.CreateVector()

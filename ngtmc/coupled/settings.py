@@ -2,7 +2,8 @@
 each with the measurement it rests on."""
 import os
 
-__all__ = ["DEBUG", "STALL_WINDOW", "STALL_FACTOR", "LEVENBERG_SHIFTS", "WEAK_STEP", "WEAK_STOP", "COUPLED_RTOL"]
+__all__ = ["DEBUG", "STALL_WINDOW", "STALL_FACTOR", "LEVENBERG_SHIFTS", "WEAK_STEP", "WEAK_STOP", "COUPLED_RTOL", "FACTOR_REUSE",
+           "BORDERED"]
 
 #: print the merits and steps of each iteration (environment variable NGTMC_DEBUG_COUPLED set)
 DEBUG = bool(os.environ.get("NGTMC_DEBUG_COUPLED"))
@@ -43,3 +44,24 @@ WEAK_STOP = True
 #: instead of 515 Newton iterations, every recorded force the same to 7e-5 N/mm (2e-6 of the peak),
 #: the peak to 1e-8 N/mm (docs/performance.md). The adjoint's recordings pass 1e-12.
 COUPLED_RTOL = 1e-6
+
+#: Reuse of the u-u factor of block-GMRES across Newton directions ("rent or buy"): GMRES always
+#: solves the current tangent, so an older factor is only a poorer preconditioner. With reuse on,
+#: a direction keeps the factor if the GMRES time spent with it beyond the iterations of its first
+#: solve (those extra iterations times the measured time per iteration), plus what the next
+#: direction is expected to add, stays below the measured time of its factorization. The next
+#: direction is expected to add what the last reused one did, or, for the first reuse of a
+#: factor, what the first reuse of the factors before it did (learned during the run: where one
+#: reuse already costs more than a factorization, as in 2D, factors are not reused). A Levenberg
+#: (shifted) direction always makes a new factor, and a solve that fails with an older factor is
+#: repeated with a new one before UMFPACK. The choice is per run: ``coupled={"factor_reuse": ...}``
+#: (True, False or "auto"). "auto", the default, reuses on 3D meshes only, as measured
+#: (docs/performance.md, "Reusing the u-u factor while it pays"): in 3D a factorization costs
+#: 35 to 68 triangular solves (medium and paper hemisphere), in 2D a reused factor's extra GMRES
+#: iterations cost more than the factorization they save.
+FACTOR_REUSE = "auto"
+
+#: Block-GMRES solves the bordered system of path following (the Newton correction and the load
+#: change together) in one GMRES run instead of two (:mod:`ngtmc.coupled.bordered`);
+#: ``coupled={"bordered": False}`` makes the two solves (docs/performance.md).
+BORDERED = True

@@ -81,7 +81,7 @@ class RunRecords:
         (``energy_noise_switches``) and, for the monolithic schemes, the coupled Newton's floor
         accepts and its worst relative residual there (-), Levenberg steps, relaxations, GMRES
         solves and their mean iterations, block-GMRES's u-u factors made and reused
-        (:data:`ngtmc.coupled.linear.FACTOR_REUSE`), and path following's dissipation steps.
+        (:data:`ngtmc.coupled.settings.FACTOR_REUSE`), and path following's dissipation steps.
         Counts, no unit."""
         s = self.solver
         out = {"floor_accepts": int(getattr(s, "floor_accepts", 0)),
@@ -96,6 +96,8 @@ class RunRecords:
                               "gmres_iterations_mean": float(np.mean(gm)) if gm else None,
                               "u_factorizations": int(c.lin.u_factorizations),
                               "u_factor_reuses": int(c.lin.u_factor_reuses),
+                              "bordered_solves": int(c.lin.bordered_solves),
+                              "bordered_fallbacks": int(c.lin.bordered_fallbacks),
                               "dissipation_steps": int(getattr(self._path, "dissipation_steps", 0) or 0),
                               "dissipation_prescaled": int(getattr(self._path, "prescaled_steps", 0) or 0),
                               "dissipation_resolved": int(getattr(self._path, "rescaled_steps", 0) or 0)}
