@@ -107,3 +107,36 @@ def test_path_following_with_one_bordered_gmres_follows_the_two_solves(kind):
 def test_bordered_option_is_checked():
     with pytest.raises(ValueError, match="bordered"):
         ngtmc.Simulation(_bar("trig"), 0.01, scheme="path-following", coupled={"bordered": "yes"})
+
+
+def test_a_bordered_solve_that_fails_with_an_older_factor_is_tried_again_with_a_new_one(monkeypatch):
+    """FACTOR_REUSE with the bordered solve: where the bordered GMRES fails with a reused u-u
+    factor, a new factor is made and the bordered solve tried again (not the two solves); where
+    it fails with a new factor, the caller's two solves decide (counted in bordered_fallbacks)."""
+    import ngtmc.coupled.linear as cl
+    from test_monolithic import _damaged_state
+    s, c = _damaged_state(seed=5)
+    free = c._free_base.copy()
+    free[:c.nu] &= ~s._dir_np
+    rng = np.random.default_rng(3)
+    r, t = (np.where(free, rng.standard_normal(free.size), 0.0) for _ in range(2))
+    cvec = np.zeros(free.size)
+    cvec[c.nu:] = np.where(free[c.nu:], rng.random(free.size - c.nu), 0.0)
+    gm = cl.CoupledLinearSolver(c.form, c.nu, "block-gmres", gmres_rtol=1e-10, factor_reuse=True)
+    c.form.AssembleLinearization(c.x.vec)
+    p0, dl0 = gm.factorize(free).bordered(r, t, cvec, 0.1)
+    gm._u_cost = 1e9                   # a factorization that never pays: keep the factor
+    calls = []
+    real = cl.bordered_gmres
+
+    def failing_once(*a, **k):
+        calls.append(1)
+        return None if len(calls) == 1 else real(*a, **k)
+    monkeypatch.setattr(cl, "bordered_gmres", failing_once)
+    p1, dl1 = gm.factorize(free).bordered(r, t, cvec, 0.1)
+    assert len(calls) == 2 and (gm.u_factorizations, gm.u_factor_reuses) == (2, 1)
+    assert (gm.bordered_solves, gm.bordered_fallbacks) == (2, 0)
+    assert dl1 == pytest.approx(dl0, rel=1e-7) and np.allclose(p1, p0, rtol=0, atol=1e-7 * np.abs(p0).max())
+    monkeypatch.setattr(cl, "bordered_gmres", lambda *a, **k: None)
+    assert gm.factorize(free).bordered(r, t, cvec, 0.1) is None   # a new factor (the last failed): no retry
+    assert gm.bordered_fallbacks == 1

@@ -250,8 +250,15 @@ class CoupledLinearSolver:
                 bad = check.Norm() > GMRES_TRUE_RTOL * rhs.Norm()
             return sol, bad
 
-        def solve(rhs, out):
+        def renew():
+            """A new u-u factor after a failed solve with an older one (reusing did not pay)."""
             nonlocal reused
+            self._u_first = max(self._u_first, self._u_cost)
+            self._u_pending = None
+            self._new_u_factor(free, shifted)
+            reused = False
+
+        def solve(rhs, out):
             rhsN = rhs.FV().NumPy()
             rhsN[~free] = 0.0
             if direct:
@@ -259,10 +266,7 @@ class CoupledLinearSolver:
                 return
             sol, bad = gmres(rhs)
             if bad and reused:         # an older factor: try again with a new one
-                self._u_first = max(self._u_first, self._u_cost)   # reusing did not pay
-                self._u_pending = None
-                self._new_u_factor(free, shifted)
-                reused = False
+                renew()
                 sol, bad = gmres(rhs)
             if bad:
                 self.inexact_solves += 1
@@ -273,18 +277,21 @@ class CoupledLinearSolver:
         def bordered(r, t, c, h):
             """(p, dlambda) of the bordered system of path following in one GMRES
             (:func:`ngtmc.coupled.bordered.bordered_gmres`; arrays over all dofs, zero where not
-            free), or None: then the caller solves the two systems with ``solve``."""
-            if direct:
-                return None
-            t0 = time.perf_counter()
-            out = bordered_gmres(numpy_operator(op), numpy_operator(pre), r, t, c, h,
-                                 self.gmres_rtol, self.gmres_maxsteps, GMRES_TRUE_RTOL)
-            if out is None:
-                self.bordered_fallbacks += 1
-                return None
-            book(out[2], t0)
-            self.bordered_solves += 1
-            return out[0], out[1]
+            free), or None: then the caller solves the two systems with ``solve``. A failure
+            with an older u-u factor is tried again with a new one."""
+            while not direct:
+                t0 = time.perf_counter()
+                out = bordered_gmres(numpy_operator(op), numpy_operator(pre), r, t, c, h,
+                                     self.gmres_rtol, self.gmres_maxsteps, GMRES_TRUE_RTOL)
+                if out is not None:
+                    book(out[2], t0)
+                    self.bordered_solves += 1
+                    return out[0], out[1]
+                if not reused:
+                    break
+                renew()                     # an older factor: try again with a new one
+            self.bordered_fallbacks += 1
+            return None
         if self.bordered:
             solve.bordered = bordered
         return solve
