@@ -48,7 +48,8 @@ Geometry of (b), mm (our choices; no published 3D reference exists)
   across the modelled width, minus the hemisphere; meshed to ``sphere_h_contact`` in a block of
   half side ``sphere_contact_box`` = 0.15 under the lowest point (the contact patch, radius about
   sqrt(R d) = 0.07 mm at d = 0.02 mm). Order-2 displacements and the regulariser only within
-  ``sphere_regularised_radius`` = 0.25 mm of the axis (region ``void``); the rest (``void_far``,
+  ``sphere_regularised_radius`` = 0.3 mm of the axis (region ``void``; not the radius 0.25, where the
+  cylinder touched the hemisphere and curving inverted thin elements); the rest (``void_far``,
   J >= 0.65 there) has order 1 and no regulariser;
 * material: Table 1 (E = 20.8e3 MPa, nu = 0.3, Gc = 0.54 N/mm) with **l0 = ``sphere_l0`` =
   0.08 mm** (at l0 = 0.03 the quick mesh would need about 1e6 tetrahedra), gamma0 = 5e-6,
@@ -132,11 +133,13 @@ PARAMETERS = {
                                       "sphere_h_contact (the contact patch); 0: none"),
     "sphere_load_zone": (0.15, "mm", "half length, depth and half width of the block of the beam top under the "
                                     "hemisphere without fracture (region 'load_zone'); 0: none"),
-    "sphere_regularised_radius": (0.25, "mm", "the void within this distance of the hemisphere's axis (region 'void') "
-                                             "carries the regulariser and order-2 displacements; the rest of the void "
-                                             "block (region 'void_far', never squeezed) has order 1 and no "
-                                             "regulariser; at least sqrt(2) sphere_contact_box; from "
-                                             "sqrt(sphere_void_half_width^2 + sphere_beam_width^2/4) on: the whole void"),
+    "sphere_regularised_radius": (0.3, "mm", "the void within this distance of the hemisphere's axis (region 'void') "
+                                            "carries the regulariser and order-2 displacements; the rest of the void "
+                                            "block (region 'void_far', never squeezed) has order 1 and no "
+                                            "regulariser; at least sqrt(2) sphere_contact_box; from "
+                                            "sqrt(sphere_void_half_width^2 + sphere_beam_width^2/4) on: the whole void; "
+                                            "not the hemisphere's radius: a cylinder tangent to the hemisphere leaves "
+                                            "thin elements that the curved mesh inverts (a scene error)"),
     "sphere_l0": (0.08, "mm", "phase-field length scale of the hemisphere case (cost: see the docstring)"),
     "sphere_reg_length": (4.0, "mm", "length L of the regulariser, k_r = kbar_r L^2 K0 (the beam length)"),
     "sphere_final_load": (0.1, "mm", "final imposed displacement of the hemisphere"),

@@ -181,3 +181,40 @@ def test_an_element_of_zero_size_is_refused_naming_it():
                      supports=[ngtmc.Support("left", x=True, y=True)], load=ngtmc.DisplacementLoad("right", "x"))
     with pytest.raises(ValueError, match=r"1 element\(s\) of zero or negative size \(mm\^2\): 2 \(plate, 0\)"):
         sc.check()
+
+
+def test_a_curved_element_inverted_at_its_integration_points_is_refused_naming_it():
+    """A square plate with a hole, one element's free vertex moved between its edge on the hole and
+    that edge's arc: the straight element is valid, mesh.Curve(2) bends the edge past the vertex,
+    det J < 0 at integration points. The scene is refused, naming the element and its region; made
+    straight again (mesh.Curve(1)) it is accepted."""
+    import ngsolve as ngs
+    from netgen.meshing import MeshPoint, Pnt
+    from netgen.occ import Circle, OCCGeometry, Rectangle, X
+    shape = Rectangle(2.0, 2.0).Face() - Circle((1.0, 1.0), 0.5).Face()
+    shape.faces.name = "plate"
+    shape.edges.Min(X).name, shape.edges.Max(X).name = "left", "right"
+    ngmesh = OCCGeometry(shape, dim=2).GenerateMesh(maxh=0.4)
+    mesh = ngs.Mesh(ngmesh)
+    pts = np.array([p.p for p in ngmesh.Points()])
+    on_hole = np.abs(np.hypot(pts[:, 0] - 1.0, pts[:, 1] - 1.0) - 0.5) < 1e-9
+    for el in mesh.Elements(ngs.VOL):
+        v = [x.nr for x in el.vertices]
+        if on_hole[v].sum() == 2:
+            (a, b), c = [i for i in v if on_hole[i]], [i for i in v if not on_hole[i]][0]
+            mid = (pts[a] + pts[b]) / 2
+            out = (mid - np.array([1.0, 1.0, 0.0])) / np.linalg.norm(mid - np.array([1.0, 1.0, 0.0]))
+            ngmesh.Points()[c + 1] = MeshPoint(Pnt(*(mid + 0.002 * out)))   # 2 um off the chord
+            moved = el.nr
+            break
+    mesh = ngs.Mesh(ngmesh)
+    mesh.Curve(2)
+
+    def scene():
+        return ngtmc.Scene(mesh, {"plate": ngtmc.Material(1000.0, 0.3)}, supports=[ngtmc.Support("left", x=True, y=True)],
+                           load=ngtmc.DisplacementLoad("right", "x"))
+    with pytest.raises(ValueError, match=rf"curved \(mesh.Curve\(2\)\) and 1 element\(s\) are inverted at integration "
+                                         rf"points \(det J <= 0\): {moved} \(plate\)"):
+        scene().check()
+    mesh.Curve(1)
+    scene().check()

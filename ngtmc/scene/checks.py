@@ -136,9 +136,15 @@ def check_scene(scene, refine_to: float | None = None):
     return scene
 
 
+#: The curved-element check of :func:`_check_mesh` samples det J at the points of a rule this much
+#: above the default one (the energies on curved elements integrate to order 2p + 2).
+CURVED_CHECK_BONUS = 6
+
+
 def _check_mesh(mesh):
-    """What a mesh would lose or break on: elements of zero (or negative) size, named by number and
-    region (a degenerate or inverted element makes J <= 0 before any load). Serial meshes only."""
+    """What a mesh would lose or break on: elements of zero (or negative) size, and curved elements
+    inverted at integration points, named by number and region (a degenerate or inverted element
+    makes J <= 0 before any load). Serial meshes only."""
     if mesh.comm.size > 1:
         return
     vol = np.asarray(ngs.Integrate(ngs.CF(1.0), mesh, element_wise=True), dtype=float).ravel()
@@ -150,6 +156,23 @@ def _check_mesh(mesh):
         named = ", ".join(f"{i} ({els[i].mat}, {vol[i]:.3g})" for i in tiny[:5])
         raise ValueError(f"Scene.mesh has {tiny.size} element(s) of zero or negative size (mm^{mesh.dim}): {named}"
                          f"{' ...' if tiny.size > 5 else ''}; a degenerate or inverted element cannot be solved on")
+    k = mesh.GetCurveOrder()
+    if k > 1:
+        # a curved element may be inverted where its size is not: det J <= 0 at integration points
+        # (the energies integrate there with weights of the wrong sign, and Newton cannot converge)
+        det = ngs.Det(ngs.specialcf.JacobianMatrix(mesh.dim))
+        bad = np.asarray(ngs.Integrate(ngs.IfPos(det, 0.0, 1.0) * ngs.dx(bonus_intorder=CURVED_CHECK_BONUS), mesh,
+                                       element_wise=True), dtype=float).ravel()
+        inverted = np.flatnonzero(bad != 0.0)
+        if inverted.size:
+            els = list(mesh.Elements(ngs.VOL))
+            regions = sorted({els[i].mat for i in inverted})
+            named = ", ".join(f"{i} ({els[i].mat})" for i in inverted[:5])
+            raise ValueError(f"Scene.mesh is curved (mesh.Curve({k})) and {inverted.size} element(s) are inverted at "
+                             f"integration points (det J <= 0): {named}{' ...' if inverted.size > 5 else ''}, in "
+                             f"region(s) {regions}; a curved face that nearly touches another face leaves thin "
+                             "elements that curving turns inside out. Keep curved faces apart (no tangent "
+                             "surfaces), mesh the thin part finer, or use mesh.Curve(1)")
 
 
 def _check_conditions(scene, need_boundary):
