@@ -73,6 +73,7 @@ medium, slab / its 2D twin         +0.40 % (whole void)       115 / 77 steps    
 quick, hemisphere (quarter)        6.1871 N at 0.0700 mm      65, 310, 245       quick_hemisphere_quarter
 medium, hemisphere (quarter)       6.0307 N at 0.0700 mm      67, 410, 932       medium_hemisphere_quarter_prescale
 paper, hemisphere (quarter)        5.9282 N at 0.0700 mm      79, 464, 2794      paper_hemisphere_quarter
+paper, hemisphere, split at 0.3    5.9336 N at 0.0700 mm      75, 427, 2112      paper_hemisphere_quarter_split_0_3
 =================================  =========================  =================  =========================
 
 The hemisphere's peak falls by 2.5 % and 1.7 % from quick to medium to paper. The case sizes its
