@@ -117,7 +117,8 @@ def bordered_gmres(matvec, precondition, r: np.ndarray, t: np.ndarray, c: np.nda
     rhs = r + dlam * t
     if np.linalg.norm(matvec(p) - dlam * t - r) > true_rtol * np.linalg.norm(rhs):
         return None
-    if abs(float(c @ p) - h) > true_rtol * float(np.abs(c * p).sum()) and abs(float(c @ p) - h) > true_rtol * abs(h):
+    miss = abs(float(c @ p) - h)
+    if miss > true_rtol * max(float(np.abs(c * p).sum()), abs(h)):
         return None
     return p, dlam, its
 

@@ -43,7 +43,6 @@ LINEAR_SOLVERS = ("block-gmres", "umfpack", "pardiso")
 GMRES_TRUE_RTOL = 1e-4
 
 
-
 class CoupledLinearSolver:
     """Factorizations of the assembled coupled tangent ``form.mat`` (u dofs first, ``nu`` of
     them). ``linear_solver``: one of LINEAR_SOLVERS; ``gmres_rtol``, ``gmres_maxsteps``: of
@@ -303,8 +302,8 @@ class CoupledLinearSolver:
         A = self.form.mat
         fa = free.copy()
         fa[:self.nu] = False
-        key = self._inv_a_key
-        if self._inv_a is not None and key[0] is A and key[1].shape == fa.shape and np.array_equal(key[1], fa):
+        matrix, kept = self._inv_a_key
+        if self._inv_a is not None and matrix is A and np.array_equal(kept, fa):
             self._inv_a.Update()
         else:
             self._inv_a = A.Inverse(ngs.BitArray(fa.tolist()), inverse="sparsecholesky")
