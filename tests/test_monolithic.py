@@ -351,3 +351,28 @@ def test_coupled_tangent_is_the_derivative_of_the_residual_in_3d_with_a_squeezed
     err_a = np.linalg.norm((fd - K)[c.nu:]) / np.linalg.norm(K[c.nu:])
     print(f"3D relative FD error of the coupled tangent: u rows {err_u:.2e}, alpha rows {err_a:.2e}")
     assert err_u < 1e-7 and err_a < 1e-7
+
+
+def test_a_failed_solve_counts_the_iterations_of_its_displacement_relaxation(monkeypatch):
+    """Where the line search fails the coupled Newton relaxes u at fixed alpha (a displacement
+    Newton); the iterations it takes count in the solve's result whether the solve then converges
+    or fails, so that a run's Newton iterations (the history, the benchmark records) hold all
+    the work done."""
+    from ngtmc.coupled.iteration import Iteration
+    from ngtmc.discrete import NewtonResult
+    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))
+    c = CoupledNewton(s)
+    assert c.solve(1e-3).converged     # the boundary values in place: the next solve starts from them
+    s.alpha.vec.FV().NumPy()[:] += 0.01   # off equilibrium, the boundary values kept
+    monkeypatch.setattr(Iteration, "search", lambda self, dxN, dlam, merit0, scale_u, lam0: (False, lam0, 0.0, math.inf))
+    calls = []
+
+    def relaxation(load):
+        calls.append(load)
+        return NewtonResult(False, 7, 1.0, 0.0, 0.0, message="relaxation failed")
+
+    monkeypatch.setattr(s, "solve_displacement", relaxation)
+    r = c.solve(1e-3)
+    assert calls == [1e-3] and c.relaxations == 1
+    assert not r.converged
+    assert r.iterations == 1 + 7   # the coupled iteration whose line search failed, and the relaxation's

@@ -107,8 +107,10 @@ class Iteration:
 
     # ------------------------------------------------------------------ endings
     def failed(self, it, message):
+        """The failure after ``it`` coupled iterations; the iterations of a displacement
+        relaxation (:meth:`relax_u`) count as well, as in :meth:`accept`."""
         self.n._scatter()
-        return NewtonResult(False, it, self.res_u, self.solve_time, self.assembly_time, 0, message)
+        return NewtonResult(False, it + self.relax_iterations, self.res_u, self.solve_time, self.assembly_time, 0, message)
 
     def accept(self, iterations, held):
         n = self.n
