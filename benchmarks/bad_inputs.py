@@ -159,7 +159,8 @@ def cases():
                       ({"vtk": False}, ("vtk", "out_dir")), ({"resume": True}, ("resume", "out_dir"))):
         add(f"simulate({kw!r})", lambda kw=kw: solve(scene(), **kw), *words)
     for key, v in (("max_iterations", 0), ("max_iterations", -1), ("rtol", 0.0), ("rtol", 2.0), ("rtol", "x"),
-                   ("atol", -1.0), ("atol", "x"), ("linear_solver", "lu"), ("floor_rtol", 2.0), ("floor_rtol", "x")):
+                   ("atol", -1.0), ("atol", "x"), ("linear_solver", "lu"), ("floor_rtol", 2.0), ("floor_rtol", "x"),
+                   ("levenberg_expansion", -1), ("levenberg_expansion", 0.5)):
         add(f"NewtonOptions({key}={v!r})", lambda key=key, v=v: ngtmc.NewtonOptions(**{key: v}), key)
     # -------------------------------------------------------------- a named study's settings
     tmp = Path(tempfile.mkdtemp())

@@ -1,5 +1,5 @@
 """The displacement Newton's line search where the stored energy's round-off hides the decrease of
-a Newton step (ngtmc.discrete.newton.NOISE_FRACTION).
+a Newton step (ngtmc.discrete.energy_search.NOISE_FRACTION).
 
 A stiff, thick scene (the L-panel's concrete, E = 25800 MPa, 100 mm thick) whose upper block is
 pushed into a 6 mm void: the force is tiny, but the energy sums densities of the size of E over
@@ -13,7 +13,7 @@ import ngsolve as ngs
 import pytest
 
 import ngtmc
-import ngtmc.discrete.newton as dn
+import ngtmc.discrete.energy_search as dn
 from scenes import two_blocks
 
 

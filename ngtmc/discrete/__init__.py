@@ -1,5 +1,6 @@
 """The discrete problem on a mesh: finite-element spaces and integration rules (spaces), the energy
-forms (energy_forms, displacement_energy), the displacement Newton (newton), the phase field and its
+forms (energy_forms, displacement_energy), the displacement Newton (newton) and its line search
+(energy_search), the phase field and its
 dissipation, boundary conditions, the compiled-code cache, the BLAS threads of a step, and the Solver that holds one scene's
 discrete state."""
 from ngtmc.discrete.blas_threads import limited as blas_limited

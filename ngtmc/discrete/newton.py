@@ -1,7 +1,8 @@
 """The displacement Newton solver of :class:`ngtmc.discrete.solver.Solver`: Newton for u at an imposed load
 with alpha fixed (step 2 of the paper's scheme), with an energy line search, a guard against
 J <= 0, the Dirichlet increment carried by the Newton increment, and a shifted (Levenberg)
-tangent where the tangent is indefinite (a squeezed void).
+tangent where the tangent is indefinite (a squeezed void). The line search is
+:mod:`ngtmc.discrete.energy_search`.
 
 :class:`DisplacementNewton` is handed its problem (:class:`DisplacementProblem`: the energy form,
 the unknown, its free and Dirichlet dofs, the boundary values at a load, the force scale of the
@@ -22,7 +23,9 @@ import time
 
 import numpy as np
 
-__all__ = ["DisplacementNewton", "DisplacementProblem", "energy_noise", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
+from ngtmc.discrete.energy_search import energy_line_search
+
+__all__ = ["DisplacementNewton", "DisplacementProblem", "NewtonOptions", "NewtonResult", "DISPLACEMENT_RTOL", "FLOOR_RTOL", "residual_split",
            "meets", "lifted_direction"]
 
 #: Relative residual of the displacement Newton where ``NewtonOptions.rtol`` is None (the default).
@@ -61,7 +64,10 @@ class NewtonOptions:
     (FLOOR_RTOL, 1e-5, the default; a round-off floor measured on the paper's studies) instead of
     rtol; None refuses such iterates (the attempt fails and the step is cut back). Each
     acceptance is counted in the history column ``floor_accepts`` of its step. Both Newton
-    solvers (displacement and coupled) use it.
+    solvers (displacement and coupled) use it. levenberg_expansion: doublings of a Levenberg step
+    of the displacement Newton accepted at full length while the energy keeps falling along it as
+    fast as its slope predicts (the tangent is indefinite there;
+    :func:`ngtmc.discrete.energy_search.expand`); 0: none.
 
     The tolerance an accepted state meets: residual norm on the free dofs (N) <= rtol x
     (the iterate's reaction norm, or the applied tractions' where larger:
@@ -76,12 +82,16 @@ class NewtonOptions:
     max_line_search: int = 12
     linear_solver: str = "sparsecholesky"
     floor_rtol: float | None = FLOOR_RTOL
+    levenberg_expansion: int = 10
 
     def __post_init__(self):
         if self.linear_solver not in ("sparsecholesky", "umfpack", "pardiso"):
             raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
         if int(self.max_iterations) < 1:
             raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
+        if isinstance(self.levenberg_expansion, bool) or int(self.levenberg_expansion) != self.levenberg_expansion \
+                or self.levenberg_expansion < 0:
+            raise ValueError(f"levenberg_expansion = {self.levenberg_expansion!r} must be an integer >= 0")
         for name in ("rtol", "floor_rtol"):
             v = getattr(self, name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v < 1)):
@@ -150,32 +160,6 @@ def lifted_direction(mat, inv, r, rem: np.ndarray, dirichlet: np.ndarray, w, tmp
 #: print the residuals of each Newton iteration (a debugging switch: ngtmc.discrete.newton._DEBUG = True)
 _DEBUG = False
 
-#: Round-off of the stored energy against the Newton slope. The energy sums densities of the size
-#: of E_max over the volume, so its evaluation error does not shrink with the strains: on the quick
-#: L-panel at 0.1-0.5 mm of the approach (2026-12-03) the energy moved by +-1.6e-8 N mm along a
-#: Newton step whose predicted decrease was 1.9e-10 N mm, while E0 was 7.5e-4 N mm (so the test
-#: |slope| < 1e-8 |E0| did not see it). The Armijo test then rejected full steps at random, half
-#: steps followed (the residual halved exactly, one more iteration), and where every length failed
-#: the Levenberg shift was compiled and used. Where the Armijo test fails, the line search measures
-#: the round-off once by the second difference E(u0 + e du) + E(u0 - e du) - 2 E0 with
-#: e = NOISE_STEP (exactly e^2 |slope| for a quadratic energy, 1e-4 |slope|); where it exceeds
-#: NOISE_FRACTION |slope|, the energy cannot resolve the step and the residual norm decides, as
-#: near convergence.
-NOISE_STEP = 1e-2
-NOISE_FRACTION = 1e-2
-
-
-def energy_noise(energy: Callable, u, u0, du, E0: float) -> float:
-    """Round-off of the stored energy ``energy(vec)`` (N mm) at ``u0`` along ``du``: |E(u0 + e du) +
-    E(u0 - e du) - 2 E0| with e = NOISE_STEP (see NOISE_FRACTION); inf where either energy is not
-    finite. Leaves the vector ``u`` at u0 - e du."""
-    total = -2.0 * E0
-    for e in (NOISE_STEP, -NOISE_STEP):
-        u.data = u0 + e * du
-        total += energy(u)
-    return abs(total) if math.isfinite(total) else math.inf
-
-
 @dataclass
 class DisplacementProblem:
     """What the displacement Newton is handed for one solve (units: mm, N).
@@ -231,7 +215,7 @@ class DisplacementNewton:
         directly, which would invert boundary elements). Steps are accepted only if the energy
         is finite (which fails as soon as J <= 0 at one quadrature point); once the boundary
         values are reached, steps must also decrease the energy (Armijo), or, where the energy's
-        round-off hides the decrease (near convergence, NOISE_FRACTION), the residual norm. If the tangent is not
+        round-off hides the decrease (near convergence, :data:`ngtmc.discrete.energy_search.NOISE_FRACTION`), the residual norm. If the tangent is not
         a descent direction (indefinite tangent in a squeezed void), it is shifted by mu M with M
         the mass matrix, mu raised by tenfold until the direction descends. Where the residual
         stops falling (by less than half in an iteration, also the last one) or the line search
@@ -308,36 +292,13 @@ class DisplacementNewton:
             slope = p.ranks.dot(r, du)
             u0.data = u
 
-            def line_search(slope):
-                """Backtracking on the step length; returns True if a step was accepted.
-
-                Energy (Armijo) while the energy can resolve the predicted decrease; near
-                convergence |slope| falls below the energy's round-off and the test switches to a
-                decrease of the residual norm. Guard: finite energy (J > 0 at the energy's
-                quadrature points) and J > 0 at the history points too (Psi_plus there feeds the
-                history; NaN would poison it)."""
+            def line_search(slope, levenberg=False):
+                """The energy line search (:func:`ngtmc.discrete.energy_search.energy_line_search`)
+                along the direction du; a Levenberg step accepted at full length is lengthened."""
                 nonlocal noise_switches
-                near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
-                noise_known = near_converged
-                s = 1.0
-                for _ in range(opt.max_line_search):
-                    u.data = u0 + s * du
-                    E = p.energy(u)
-                    if math.isfinite(E) and p.admissible():
-                        if lifted or E <= E0 + opt.armijo * s * slope:
-                            return True
-                        if not noise_known:
-                            noise_known = True
-                            near_converged = energy_noise(p.energy, u, u0, du, E0) > NOISE_FRACTION * abs(slope)
-                            noise_switches += near_converged
-                            u.data = u0 + s * du
-                        if near_converged:
-                            p.form.Apply(u, tmp)
-                            if p.ranks.masked_norm(tmp, p.free) <= (1 - 1e-4 * s) * res:
-                                return True
-                    s *= 0.5
-                u.data = u0
-                return False
+                accepted, switched = energy_line_search(p, opt, du, E0, slope, res, lifted, levenberg)
+                noise_switches += switched
+                return accepted
 
             accepted = (lifted or slope < 0.0) and line_search(slope)
             tm["line_search"] += time.perf_counter() - t_ls
@@ -363,7 +324,7 @@ class DisplacementNewton:
                     solve_time += time.perf_counter() - t0
                     slope = p.ranks.dot(r, du)
                     t_ls = time.perf_counter()
-                    ok = (lifted or slope < 0.0) and line_search(slope)
+                    ok = (lifted or slope < 0.0) and line_search(slope, levenberg=True)
                     tm["line_search"] += time.perf_counter() - t_ls
                     if ok:
                         accepted = True

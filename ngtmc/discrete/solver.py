@@ -224,7 +224,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
         self.floor_rtol = self.newton.floor_rtol
         self.floor_accepts = 0
         #: line searches of the displacement Newton whose energy could not resolve the step
-        #: (round-off, ngtmc.discrete.newton.NOISE_FRACTION), so that its residual decided
+        #: (round-off, ngtmc.discrete.energy_search.NOISE_FRACTION), so that its residual decided
         self.energy_noise_switches = 0
 
     # ================================================================= mesh-dependent data
