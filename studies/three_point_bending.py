@@ -58,7 +58,7 @@ resolution  peak [N/mm] at [mm]    steps, Newton, wall [s]  record
 ==========  =====================  =======================  =========================
 quick       37.499 at 0.0948       82, 388, 147             quick_footprint
 medium      36.711 at 0.0941 [1]   109, 774, 250            medium_path_following
-paper       36.142 at 0.0940       157, 839, 764            paper_footprint
+paper       36.394 at 0.0942       183, 967, 280            paper_levenberg_expansion
 ==========  =====================  =======================  =========================
 
 [1] the whole void regularised (``--set regularised_half_width=1``), as ``quick_path_following``
