@@ -27,7 +27,7 @@ def _problem(mu0: float = 1e-2):
     mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.1))
     fes = ngs.H1(mesh, order=1, dirichlet="left")
     gfu = ngs.GridFunction(fes)
-    u, v = fes.TnT()
+    u = fes.TrialFunction()
     density = lambda w: EPS / 2 * ngs.grad(w) * ngs.grad(w) + (w * w - 1) ** 2 / 4
     form = ngs.BilinearForm(fes)
     form += ngs.Variation(density(u) * ngs.dx)
@@ -76,8 +76,7 @@ def test_the_expanded_levenberg_step_reaches_the_minimum_in_fewer_iterations():
     assert expanded.iterations < plain.iterations
 
 
-
-@pytest.mark.parametrize("bad", [-1, 1.5, True, "3"])
-def test_a_bad_levenberg_expansion_is_refused(bad):
-    with pytest.raises((ValueError, TypeError), match="levenberg_expansion|int"):
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "3", None])
+def test_a_bad_levenberg_expansion_is_refused_naming_it(bad):
+    with pytest.raises(ValueError, match="levenberg_expansion"):
         dn.NewtonOptions(levenberg_expansion=bad)

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 import math
+import numbers
 import time
 
 import numpy as np
@@ -89,8 +90,8 @@ class NewtonOptions:
             raise ValueError(f"linear_solver = {self.linear_solver!r} is not one of 'sparsecholesky', 'umfpack', 'pardiso'")
         if int(self.max_iterations) < 1:
             raise ValueError(f"max_iterations = {self.max_iterations!r} must be >= 1")
-        if isinstance(self.levenberg_expansion, bool) or int(self.levenberg_expansion) != self.levenberg_expansion \
-                or self.levenberg_expansion < 0:
+        if (isinstance(self.levenberg_expansion, bool) or not isinstance(self.levenberg_expansion, numbers.Integral)
+                or self.levenberg_expansion < 0):
             raise ValueError(f"levenberg_expansion = {self.levenberg_expansion!r} must be an integer >= 0")
         for name in ("rtol", "floor_rtol"):
             v = getattr(self, name)
