@@ -24,14 +24,15 @@ applied: it bounds the dissipation per step, which the path now does itself):
    current segment of the schedule; if it would pass the segment's end, the step is a
    displacement step to that end.
 3. A dissipation step that moves the load by more than du_max is solved again with the
-   dissipation scaled down in proportion (0.9 du_max / |load change|); if the load still moves
-   too far, the crack has stopped and the step is a displacement step of du. So is the last
-   attempt of a step (du below 2 du_min) whose dissipation solve failed (an arrested crack, or a
-   solve stalled at every dD); only the last: doing so on every such failure turned legitimate
-   snaps into displacement steps (tests/test_extrude.py). With ``prescale`` (off by default),
-   where the secant predictor (rule 6) already moves the load by more than du_max, dD is scaled
-   so before the first solve. A displacement step on a step's last attempt whose coupled Newton
-   fails ends in the scheme's fallback (``coupled["fallback"]``; ``staggered_iterations`` > 0).
+   dissipation scaled down in proportion (0.9 du_max / |load change|), from the chord to the
+   state it converged to (``CHORD``); if the load still moves too far, the crack has stopped and
+   the step is a displacement step of du. So is the last attempt of a step (du below 2 du_min)
+   whose dissipation solve failed (an arrested crack, or a solve stalled at every dD); only the
+   last: doing so on every such failure turned legitimate snaps into displacement steps
+   (tests/test_extrude.py). With ``prescale`` (off by default), where the secant predictor
+   (rule 6) already moves the load by more than du_max, dD is scaled so before the first solve.
+   A displacement step on a step's last attempt whose coupled Newton fails ends in the scheme's
+   fallback (``coupled["fallback"]``; ``staggered_iterations`` > 0).
 4. On a new segment of the schedule (after a turning point) the rule starts afresh: rate 0,
    displacement steps first (an unloading segment does not dissipate).
 5. After a dissipation step the next step is a dissipation step too (in stable growth after a
@@ -69,8 +70,11 @@ __all__ = ["DissipationPath"]
 N_S = 1
 
 #: Rule 3: a dissipation step whose load moves (or is predicted to move) more than du_max is sized
-#: to move it by this fraction of du_max.
+#: to move it by this fraction of du_max; its solve at the smaller dD starts from the chord to the
+#: long step's state (CHORD, :meth:`ngtmc.stepping.predictor.SecantPredictor.chord`), False: from
+#: the secant predictor.
 BOUNDED_FRACTION = 0.9
+CHORD = True
 
 class DissipationPath(PathAcrossRefinement):
     """Step rule of the path-following monolithic scheme (module docstring) for a
@@ -103,9 +107,7 @@ class DissipationPath(PathAcrossRefinement):
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
                  growth_ceiling: bool | str = "auto", prescale: bool = False, *,
                  coupled_step: Callable, fixed_step: Callable):
-        self.sim = sim
-        self.coupled_step = coupled_step
-        self.fixed_step = fixed_step
+        self.sim, self.coupled_step, self.fixed_step = sim, coupled_step, fixed_step
         #: rule 3 before the solve (module docstring)
         self.prescale = bool(prescale)
         self.coupled = c = sim.coupled
@@ -125,9 +127,8 @@ class DissipationPath(PathAcrossRefinement):
         self.d_prev = c.D.value()
         #: accepted steps taken under dissipation control
         self.dissipation_steps = 0
-        #: dissipation attempts whose dD was scaled down before the solve (the secant predictor
-        #: moved the load past du_max), and those solved again with a smaller dD after a solve
-        #: whose load moved past du_max (rule 3)
+        #: dissipation attempts scaled down before their solve, and those solved again at a smaller
+        #: dD after it (rule 3: the load moved, or was predicted to move, past du_max)
         self.prescaled_steps = 0
         self.rescaled_steps = 0
         #: True after a dissipation step: the next step is one too, until the load of a
@@ -251,8 +252,10 @@ class DissipationPath(PathAcrossRefinement):
             # (the same bound on the load change as a displacement step, at converged damage)
             dD_small = BOUNDED_FRACTION * dD * du_max / abs(self.coupled.load_solved - load_n)
             self.rescaled_steps += 1
-            s.set_state(keep)
-            r = self.coupled.solve(load_guess, dissipation=dD_small, load_bounds=(lo, hi))
+            long_step, long_load = s.get_state(), self.coupled.load_solved
+            s.set_state(keep)   # the solve starts from the chord to the long step (CHORD), else the predictor
+            chord = pr.chord(long_step, long_load, dD_small / dD) if CHORD else None
+            r = self.coupled.solve(load_guess if chord is None else chord, dissipation=dD_small, load_bounds=(lo, hi))
             add_solve(info, r)
             if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
                 # still too far: the crack has stopped growing; a displacement step instead,
@@ -387,11 +390,8 @@ class DissipationPath(PathAcrossRefinement):
         from the solver's current state)."""
         self.predictor.set_state(st, arrays)
         self.delta_d_prev = float(st.get("delta_d_prev", 0.0))
-        self.rate = float(st["rate"])
-        self.d_prev = float(st["d_prev"])
-        self.dissipation_steps = int(st["dissipation_steps"])
-        self.prescaled_steps = int(st.get("prescaled_steps", 0))
-        self.rescaled_steps = int(st.get("rescaled_steps", 0))
+        self.rate, self.d_prev, self.dissipation_steps = float(st["rate"]), float(st["d_prev"]), int(st["dissipation_steps"])
+        self.prescaled_steps, self.rescaled_steps = int(st.get("prescaled_steps", 0)), int(st.get("rescaled_steps", 0))
         self.dissipating = bool(st.get("dissipating", False))
         self.sizing.set_state(st)
         self._scale_ref = float(st.get("scale_ref", self.sim.control_state.scale))

@@ -60,6 +60,32 @@ class SecantPredictor:
         s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + f * (a_n - a_p), a_n, 1.0)
         return load
 
+    def chord(self, end: dict, end_load: float, fraction: float) -> float | None:
+        """Set the solver's u and alpha on the chord from the last accepted state x_n to ``end``
+        (a converged state of the same step whose load moved too far, with its load ``end_load``,
+        mm): x_n + fraction (end - x_n), alpha kept in [alpha_n, 1], with the boundary values of
+        the load on that chord. Returns that load, or None (state unchanged) where ``fraction`` is
+        outside (0, 1) or an element would invert.
+
+        Why: rule 3 of :mod:`ngtmc.stepping.path` solves such a step again at a smaller dD; from
+        the secant predictor the quick 3D hemisphere's re-solves took up to 15 Newton iterations
+        and a displacement relaxation each, the converged long step lies on the path it follows."""
+        if not 0.0 < fraction < 1.0 or np.shape(end["u"]) != self.x_n[0].shape:
+            return None
+        s = self.sim.solver
+        u_n, a_n = self.x_n
+        uN = s.u.vec.FV().NumPy()
+        keep = uN.copy()
+        load = self.load_n + fraction * (float(end_load) - self.load_n)
+        uN[:] = u_n + fraction * (np.asarray(end["u"]) - u_n)
+        uN[s._dir_np] = s.dirichlet_target(load)[s._dir_np]
+        if not (s.ranks.all_finite(uN) and s.min_J() > 0.0):
+            uN[:] = keep
+            return None
+        s._r_valid = False
+        s.alpha.vec.FV().NumPy()[:] = np.clip(a_n + fraction * (np.asarray(end["alpha"]) - a_n), a_n, 1.0)
+        return load
+
     def states(self) -> list[dict]:
         """The accepted state before the last one, (u, alpha), as a partial state that a
         refinement transfers to the new mesh (:func:`ngtmc.adapt.bisection.refine`,
