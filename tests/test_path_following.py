@@ -154,6 +154,8 @@ def test_path_options_are_checked():
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"growth_ceiling": "no"})
     with pytest.raises(ValueError, match="prescale"):
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"prescale": "yes"})
+    with pytest.raises(ValueError, match="chord"):
+        ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"chord": 1})
     with pytest.raises(ValueError, match="weak_stop"):
         ngtmc.Simulation(_plate(), 0.01, scheme="path-following", coupled={"weak_stop": 1})
     with pytest.raises(ValueError, match="path"):
@@ -568,11 +570,10 @@ def test_the_chord_to_a_long_step_starts_its_re_solve(monkeypatch):
     (SecantPredictor.chord; f = the ratio of the dDs): u on the free dofs on the chord, the
     boundary values those of the chord's load, alpha on the chord kept in [alpha_n, 1]; a
     fraction outside (0, 1) or a chord that inverts an element leaves the state as it was. With
-    the chord and without it (the secant predictor, CHORD False) the plate breaks along the same
+    ``coupled={"chord": True}`` and without it (the secant predictor, the default) the plate breaks along the same
     curve (peaks within 0.5 %), no dissipation step moves the load past du_max, and the re-solves
     take fewer Newton iterations from the chord."""
     from ngtmc.coupled import monolithic
-    from ngtmc.stepping import path as path_module
 
     # the chord itself, on a state two steps into the run
     sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
@@ -598,9 +599,8 @@ def test_the_chord_to_a_long_step_starts_its_re_solve(monkeypatch):
     # the rule: the re-solves' iterations with and without the chord
     runs = {}
     for chord in (True, False):
-        monkeypatch.setattr(path_module, "CHORD", chord)
         sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, k_u=100.0, du_min=1e-7),
-                               scheme="path-following")
+                               scheme="path-following", coupled={"chord": chord})
         re_solves, seen = [], [0]
         solve = monolithic.CoupledNewton.solve
 

@@ -140,7 +140,8 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
         :meth:`ngtmc.stepping.sizing.DissipationSizing.ceiling_applies`), ``prescale`` (True: after a
         dissipation step, a dissipation step whose secant predictor moves the load by more than
         du_max is scaled down before it is solved, rule 3 of :mod:`ngtmc.stepping.path`; default False: only
-        after) and ``weak_stop`` (default True,
+        after), ``chord`` (True: rule 3's solve at the smaller dD starts from the chord to the long
+        step's converged state; default False: from the secant predictor) and ``weak_stop`` (default True,
         :data:`ngtmc.coupled.settings.WEAK_STOP`).
     newton : NewtonOptions, optional
     progress : bool or callable

@@ -24,8 +24,8 @@ applied: it bounds the dissipation per step, which the path now does itself):
    current segment of the schedule; if it would pass the segment's end, the step is a
    displacement step to that end.
 3. A dissipation step that moves the load by more than du_max is solved again with the
-   dissipation scaled down in proportion (0.9 du_max / |load change|), from the chord to the
-   state it converged to (``CHORD``); if the load still moves too far, the crack has stopped and
+   dissipation scaled down in proportion (0.9 du_max / |load change|) (with ``chord``, from the
+   chord to the state it converged to); if the load still moves too far, the crack has stopped and
    the step is a displacement step of du. So is the last attempt of a step (du below 2 du_min)
    whose dissipation solve failed (an arrested crack, or a solve stalled at every dD); only the
    last: doing so on every such failure turned legitimate snaps into displacement steps
@@ -70,11 +70,8 @@ __all__ = ["DissipationPath"]
 N_S = 1
 
 #: Rule 3: a dissipation step whose load moves (or is predicted to move) more than du_max is sized
-#: to move it by this fraction of du_max; its solve at the smaller dD starts from the chord to the
-#: long step's state (CHORD, :meth:`ngtmc.stepping.predictor.SecantPredictor.chord`), False: from
-#: the secant predictor.
+#: to move it by this fraction of du_max.
 BOUNDED_FRACTION = 0.9
-CHORD = True
 
 class DissipationPath(PathAcrossRefinement):
     """Step rule of the path-following monolithic scheme (module docstring) for a
@@ -98,6 +95,10 @@ class DissipationPath(PathAcrossRefinement):
     prescale : bool
         Rule 3 before the solve as well as after it (module docstring). Off by default: it
         paid in the quick 3D hemisphere's tail and not in the quick 2D three-point bending.
+    chord : bool
+        Rule 3's solve at the smaller dD from the chord to the long step's converged state
+        (:meth:`~ngtmc.stepping.predictor.SecantPredictor.chord`), not from the secant predictor.
+        Off by default: measured in docs/performance.md ("Path following and its options").
     coupled_step, fixed_step : callable
         ``(load, info) -> (converged, info)``: the coupled Newton at a fixed load from the current
         state (restored on failure), and the same with the scheme's fallback where it fails
@@ -105,11 +106,11 @@ class DissipationPath(PathAcrossRefinement):
     """
 
     def __init__(self, sim, crack_advance: float | None = None, crack_front: float | None = None,
-                 growth_ceiling: bool | str = "auto", prescale: bool = False, *,
+                 growth_ceiling: bool | str = "auto", prescale: bool = False, chord: bool = False, *,
                  coupled_step: Callable, fixed_step: Callable):
         self.sim, self.coupled_step, self.fixed_step = sim, coupled_step, fixed_step
-        #: rule 3 before the solve (module docstring)
-        self.prescale = bool(prescale)
+        #: rule 3 before the solve, and its re-solve from the chord (module docstring)
+        self.prescale, self.chord = bool(prescale), bool(chord)
         self.coupled = c = sim.coupled
         s = sim.solver
         #: the fracture regions' mean l0, mm (default crack advance; the crack's resolution of
@@ -253,8 +254,8 @@ class DissipationPath(PathAcrossRefinement):
             dD_small = BOUNDED_FRACTION * dD * du_max / abs(self.coupled.load_solved - load_n)
             self.rescaled_steps += 1
             long_step, long_load = s.get_state(), self.coupled.load_solved
-            s.set_state(keep)   # the solve starts from the chord to the long step (CHORD), else the predictor
-            chord = pr.chord(long_step, long_load, dD_small / dD) if CHORD else None
+            s.set_state(keep)   # the solve starts from the chord to the long step (``chord``), else the predictor
+            chord = pr.chord(long_step, long_load, dD_small / dD) if self.chord else None
             r = self.coupled.solve(load_guess if chord is None else chord, dissipation=dD_small, load_bounds=(lo, hi))
             add_solve(info, r)
             if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):

@@ -153,9 +153,10 @@ class StepSchemes:
         if self.crack_front is not None and not (float(self.crack_front) > 0 and self.solver.dim == 3):
             raise ValueError(f"coupled crack_front = {self.crack_front!r} mm must be > 0, and is for 3D scenes only "
                              "(in 2D the dissipation is per mm of thickness)")
-        self.prescale = copt.pop("prescale", False)
-        if not isinstance(self.prescale, bool):
-            raise ValueError(f"coupled prescale = {self.prescale!r} must be True or False")
+        self.prescale, self.chord = copt.pop("prescale", False), copt.pop("chord", False)
+        for key, value in (("prescale", self.prescale), ("chord", self.chord)):
+            if not isinstance(value, bool):
+                raise ValueError(f"coupled {key} = {value!r} must be True or False")
         path_du_max = copt.pop("du_max", None)
         if self.crack_advance is not None and not (float(self.crack_advance) > 0):
             raise ValueError(f"coupled crack_advance = {self.crack_advance!r} mm must be > 0")
@@ -177,7 +178,7 @@ class StepSchemes:
         self._path = None
         if self.coupled is not None and self.path == "dissipation":
             self._path = DissipationPath(
-                self, self.crack_advance, self.crack_front, self.growth_ceiling, prescale=self.prescale,
+                self, self.crack_advance, self.crack_front, self.growth_ceiling, prescale=self.prescale, chord=self.chord,
                 coupled_step=lambda load, info: self._coupled_newton(load, info),
                 fixed_step=lambda load, info, saved: self._coupled_or_fallback(load, info, saved))
             # a displacement step of the monolithic scheme carries no lag, so its size does not set
