@@ -6,6 +6,7 @@ option of the package.
 
     python -m benchmarks.crack_run_newton --study three-point-bending --resolution quick
     python -m benchmarks.crack_run_newton --variants base local-halve
+    python -m benchmarks.crack_run_newton --study three-point-bending-3d --set parts=hemisphere --variants base chord
 
 Variants (``base``: the package as it is):
 
@@ -22,7 +23,10 @@ Variants (``base``: the package as it is):
   times), before the whole step is;
 * ``active-set``: alpha dofs whose linear step crosses a bound are held on it and the direction
   solved again (up to twice per direction);
-* ``rtol-1e-5``, ``rtol-1e-4``: the coupled Newton's relative tolerance (``COUPLED_RTOL``, 1e-6).
+* ``rtol-1e-5``, ``rtol-1e-4``: the coupled Newton's relative tolerance (``COUPLED_RTOL``, 1e-6);
+* ``chord``: rule 3's re-solve at a smaller dD from the chord to the long step's converged state
+  (``coupled={"chord": True}`` on every case), not from the secant predictor; ``no-chord``: from
+  the secant predictor on every case (``chord`` False), whatever the study sets.
 
 Record: ``<study>-<resolution>-<UTC time>-crack-run-newton.json`` / ``.md`` in ``--out``.
 """
@@ -44,7 +48,7 @@ from .run import machine_info
 from .study_process import RESULTS, git_state, git_text, run_study, stamp, summary_of, write_record
 
 VARIANTS = ("base", "alpha-none", "alpha-half", "alpha-1.5", "alpha-quadratic", "u-relaxed", "first-fixed-load",
-            "local-halve", "local-freeze", "active-set", "rtol-1e-5", "rtol-1e-4")
+            "local-halve", "local-freeze", "active-set", "rtol-1e-5", "rtol-1e-4", "chord", "no-chord")
 
 #: where a child process writes the counts its patch keeps (displacement relaxations, re-solves)
 _COUNTS_ENV = "NGTMC_BENCH_COUNTS"
@@ -246,6 +250,14 @@ def apply(variant: str, counts: dict):
         _patch_active_set(2, counts)
     elif variant.startswith("rtol-"):
         _patch_rtol(float(variant[5:]))
+    elif variant in ("chord", "no-chord"):
+        from ngtmc.stepping import path
+        init = path.DissipationPath.__init__
+
+        def init_(self, *args, **kw):
+            init(self, *args, **kw)
+            self.chord = variant == "chord"
+        path.DissipationPath.__init__ = init_
     else:
         raise ValueError(f"unknown variant {variant!r}; known: {', '.join(VARIANTS)}")
 
@@ -273,6 +285,8 @@ def main(argv=None) -> int:
     ap.add_argument("--resolution", "-r", default="quick")
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=VARIANTS)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
+                    help="a study setting for every variant (repeatable)")
     ap.add_argument("--out", default=str(RESULTS))
     args = ap.parse_args(argv)
     cmd = "python -m benchmarks.crack_run_newton " + shlex.join(argv)
@@ -282,7 +296,7 @@ def main(argv=None) -> int:
         for v in args.variants:
             folder, counts_file = Path(tmp) / v, Path(tmp) / f"{v}-counts.json"
             print(f"[crack_run_newton] {v}", flush=True)
-            out = run_study(args.study, args.resolution, folder, args.threads,
+            out = run_study(args.study, args.resolution, folder, args.threads, sets=args.sets,
                             env={_COUNTS_ENV: str(counts_file)},
                             launcher=(sys.executable, "-m", "benchmarks.crack_run_newton", "--child", v))
             row = {"variant": v, **out, **summary_of(folder)}
@@ -296,7 +310,7 @@ def main(argv=None) -> int:
             rows.append(row)
             print(f"[crack_run_newton] {v}: {row.get('steps')} steps, {row.get('newton_iterations')} Newton, "
                   f"peak {row.get('peak_force')}", flush=True)
-    record = {"command": cmd, "study": args.study, "resolution": args.resolution, "threads": args.threads,
+    record = {"command": cmd, "study": args.study, "resolution": args.resolution, "threads": args.threads, "sets": args.sets,
               "time": when, "git": git_state(), "machine": machine_info(), "rows": rows}
     lines = [f"### Path-following Newton variants, {args.study}, {args.resolution} ({when})", "", f"`{cmd}`", "",
              f"{git_text(record)}, {args.threads} thread(s), one run at a time; each variant patches the "
