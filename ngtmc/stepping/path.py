@@ -253,9 +253,9 @@ class DissipationPath(PathAcrossRefinement):
             # (the same bound on the load change as a displacement step, at converged damage)
             dD_small = BOUNDED_FRACTION * dD * du_max / abs(self.coupled.load_solved - load_n)
             self.rescaled_steps += 1
-            long_step, long_load = s.get_state(), self.coupled.load_solved
+            long_step = s.get_state() if self.chord else None
             s.set_state(keep)   # the solve starts from the chord to the long step (``chord``), else the predictor
-            chord = pr.chord(long_step, long_load, dD_small / dD) if self.chord else None
+            chord = pr.chord(long_step, self.coupled.load_solved, dD_small / dD) if self.chord else None
             r = self.coupled.solve(load_guess if chord is None else chord, dissipation=dD_small, load_bounds=(lo, hi))
             add_solve(info, r)
             if r.converged and abs(self.coupled.load_solved - load_n) > du_max * (1 + 1e-9):
