@@ -449,6 +449,40 @@ def test_a_displacement_step_that_the_coupled_newton_cannot_close_falls_back_to_
     assert again.converged and again.iterations == 0
 
 
+def test_the_last_attempts_displacement_step_starts_from_the_accepted_state(monkeypatch):
+    """A displacement step taken on a step's last attempt (du < 2 du_min, ``fallback``) starts
+    from the last accepted state, not from the secant predictor: the secant scales the last step's
+    change by the ratio of the load changes, and after a dissipation step at an almost constant
+    load (a snap-back) that ratio asks for a whole crack advance per 1e-8 mm. The paper L-panel
+    failed so at 6.2093 mm (docs/performance.md): from the secant its last attempt began 60 times
+    further from equilibrium than the accepted state and stalled; from that state it closed. Here
+    the secant is made wrong (the state before the last one moved): the step must not use it, and
+    closes at once next to the accepted state."""
+    sim = ngtmc.Simulation(_plate(), 0.012, ngtmc.AdaptiveStepControl(du_max=1e-3, du_min=1e-7),
+                           scheme="path-following")
+    for _ in range(3):
+        sim.advance()
+    path, s = sim._path, sim.solver
+    u_prev, a_prev = path.predictor.x_prev
+    path.predictor.x_prev = (u_prev - 50.0 * (path.predictor.x_n[0] - u_prev), a_prev)   # a wrong secant
+    accepted = s.get_state()
+    used = []
+    set_secant = path.predictor.set
+    monkeypatch.setattr(path.predictor, "set", lambda *a, **k: used.append(a) or set_secant(*a, **k))
+    load = path.predictor.load_n + 1e-8
+    info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0, "projected": 0}
+    ok, out = path._fixed(load, dict(info), fallback=True)
+    assert ok and not used and out["staggered_iterations"] == 0
+    assert out["newton_iterations"] <= 2
+    assert s.load == pytest.approx(load, abs=1e-15)
+    du = s.u.vec.FV().NumPy() - accepted["u"]
+    assert np.abs(du).max() < 5 * 1e-8   # u moved by the order of the load change (1e-8 mm)
+    # the probing displacement step (no fallback) still starts from the secant
+    s.set_state(accepted)
+    path._fixed(load, dict(info))
+    assert used
+
+
 def test_a_factor_that_fails_again_holds_the_ceiling_below_it():
     """CEILING_REPEAT: a cut-back whose first attempt's factor is no larger than that of the last
     cut-back (the factor failed again) sets the ceiling at half of it, below CEILING_MIN if need be,

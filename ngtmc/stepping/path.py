@@ -329,14 +329,14 @@ class DissipationPath(PathAcrossRefinement):
         """Displacement step: a predictor (the secant through the last two accepted states, else
         the u solve with alpha_{n-1}), then the coupled Newton at ``load``. With ``fallback``
         (a displacement step taken instead of a dissipation step, where no dissipation step is
-        left to try), where the coupled Newton fails the monolithic scheme's fallback follows
-        (``coupled["fallback"]``, default converged staggered passes at ``load``;
-        ``fixed_step``)."""
+        left to try), the u solve from the last accepted state, not the secant (which scales the last
+        step's change by the load's: at a nearly constant load, a crack's advance), and where the coupled
+        Newton fails the fallback (``coupled["fallback"]``, default staggered passes; ``fixed_step``)."""
         sim, s = self.sim, self.sim.solver
         saved = s.get_state() if fallback and sim.fallback == "single-pass" else None
         pr = self.predictor
         dl = pr.last_load_increment()
-        if not (dl != 0.0 and pr.set((load - pr.load_n) / dl, load) is not None):
+        if fallback or not (dl != 0.0 and pr.set((load - pr.load_n) / dl, load) is not None):
             res = s.solve_displacement(load)
             add_solve(info, res)
             if not res.converged:
