@@ -149,3 +149,5 @@ def test_the_command_adds_a_run_to_its_study_file(tmp_path, monkeypatch):
     r = subprocess.run([sys.executable, "-m", "ngtmc.study.measured", "--help"], capture_output=True, text=True,
                        cwd=ROOT, timeout=120)
     assert r.returncode == 0 and "RUN_DIR" in r.stdout.upper()
+    # and without runpy's warning that the package had loaded the module before it ran
+    assert "RuntimeWarning" not in r.stderr, r.stderr

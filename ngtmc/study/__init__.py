@@ -10,7 +10,6 @@ from ngtmc.study.parameters import study_parameters
 from ngtmc.study.registry import (
     STUDIES, data_path, list_studies, load_study, load_study_file, registered_studies,
 )
-from ngtmc.study.measured import records
 
 from ngtmc.study.parameters import (
     guess_unit, parameter_table, parameters_hash, physics_hash, resume_parameters, run_description,
@@ -29,3 +28,12 @@ __all__ += [
     'read_metadata', 'resume_parameters', 'run_description', 'typed_overrides', 'versions',
     'write_atomic', 'write_json', 'write_npz',
 ]
+
+
+def __getattr__(name):
+    """``records`` (:func:`ngtmc.study.measured.records`) on first use: imported here, the module
+    would be loaded before ``python -m ngtmc.study.measured`` runs it, and runpy warns."""
+    if name == "records":
+        from ngtmc.study.measured import records
+        return records
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
