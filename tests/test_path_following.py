@@ -7,6 +7,7 @@ import pytest
 
 import ngtmc
 from ngtmc.coupled import CoupledNewton
+from ngtmc.stepping.control import attempt_info
 from scenes import notched_plate
 
 
@@ -438,11 +439,10 @@ def test_a_displacement_step_that_the_coupled_newton_cannot_close_falls_back_to_
         return False, info
 
     monkeypatch.setattr(sim, "_coupled_newton", fail)
-    info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0, "projected": 0}
-    ok, out = path._fixed(load, dict(info))
+    ok, out = path._fixed(load, attempt_info())
     assert not ok and out["message"] == "made to fail"
     s.set_state(saved)
-    ok, out = path._fixed(load, dict(info), fallback=True)
+    ok, out = path._fixed(load, attempt_info(), fallback=True)
     assert ok and out["staggered_iterations"] >= 1
     assert s.load == pytest.approx(load)
     again = s.solve_displacement(load)                  # u is in equilibrium at that load and alpha
@@ -470,8 +470,7 @@ def test_the_last_attempts_displacement_step_starts_from_the_accepted_state(monk
     set_secant = path.predictor.set
     monkeypatch.setattr(path.predictor, "set", lambda *a, **k: used.append(a) or set_secant(*a, **k))
     load = path.predictor.load_n + 1e-8
-    info = {"newton_iterations": 0, "solve_time": 0.0, "assembly_time": 0.0, "staggered_iterations": 0, "projected": 0}
-    ok, out = path._fixed(load, dict(info), fallback=True)
+    ok, out = path._fixed(load, attempt_info(), fallback=True)
     assert ok and not used and out["staggered_iterations"] == 0
     assert out["newton_iterations"] <= 2
     assert s.load == pytest.approx(load, abs=1e-15)
@@ -479,7 +478,7 @@ def test_the_last_attempts_displacement_step_starts_from_the_accepted_state(monk
     assert np.abs(du).max() < 5 * 1e-8   # u moved by the order of the load change (1e-8 mm)
     # the probing displacement step (no fallback) still starts from the secant
     s.set_state(accepted)
-    path._fixed(load, dict(info))
+    path._fixed(load, attempt_info())
     assert used
 
 
