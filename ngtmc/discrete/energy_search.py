@@ -60,26 +60,29 @@ def energy_line_search(p, opt, du, E0: float, slope: float, res: float, lifted: 
     u = p.u.vec
     _, _, _, tmp, u0 = p.vectors
     switched = 0
+    # the step predicts a decrease below 1e-8 of the energy: its round-off may hide it
     near_converged = (not lifted) and abs(slope) < 1e-8 * max(abs(E0), 1e-300)
-    noise_known = near_converged
+    noise_known = False
     s = 1.0
     for _ in range(opt.max_line_search):
         u.data = u0 + s * du
         E = p.energy(u)
         if math.isfinite(E) and p.admissible():
-            if lifted or E <= E0 + opt.armijo * s * slope:
-                if expand_full_step and s == 1.0 and not lifted:
-                    expand(p, du, E0, slope, int(opt.levenberg_expansion))
-                return True, switched
-            if not noise_known:
+            armijo = E <= E0 + opt.armijo * s * slope
+            if not lifted and not noise_known and (near_converged or not armijo):
+                # the energy's verdict is in doubt: measure its round-off once along this direction
                 noise_known = True
                 near_converged = energy_noise(p.energy, u, u0, du, E0) > NOISE_FRACTION * abs(slope)
                 switched += near_converged
                 u.data = u0 + s * du
-            if near_converged:
+            if near_converged:   # the energy cannot resolve the step: the residual norm decides
                 p.form.Apply(u, tmp)
                 if p.ranks.masked_norm(tmp, p.free) <= (1 - 1e-4 * s) * res:
                     return True, switched
+            elif lifted or armijo:
+                if expand_full_step and s == 1.0 and not lifted:
+                    expand(p, du, E0, slope, int(opt.levenberg_expansion))
+                return True, switched
         s *= 0.5
     u.data = u0
     return False, switched
