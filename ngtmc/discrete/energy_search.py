@@ -18,11 +18,14 @@ __all__ = ["energy_line_search", "energy_noise", "expand", "NOISE_STEP", "NOISE_
 #: Newton step whose predicted decrease was 1.9e-10 N mm, while E0 was 7.5e-4 N mm (so the test
 #: |slope| < 1e-8 |E0| did not see it). The Armijo test then rejected full steps at random, half
 #: steps followed (the residual halved exactly, one more iteration), and where every length failed
-#: the Levenberg shift was compiled and used. Where the Armijo test fails, the line search measures
-#: the round-off once by the second difference E(u0 + e du) + E(u0 - e du) - 2 E0 with
-#: e = NOISE_STEP (exactly e^2 |slope| for a quadratic energy, 1e-4 |slope|); where it exceeds
-#: NOISE_FRACTION |slope|, the energy cannot resolve the step and the residual norm decides, as
-#: near convergence.
+#: the Levenberg shift was compiled and used. Where the Armijo test fails, or where the step
+#: predicts a decrease below 1e-8 of the energy (then a passed test may be round-off too: at the
+#: paper L-panel's stall the energy, 27 N mm, moved by 1e-8 N mm between evaluations against
+#: predicted decreases of 1e-9 N mm, and steps so accepted, then lengthened, raised the residual),
+#: the line search measures the round-off once by the second difference E(u0 + e du) + E(u0 - e du)
+#: - 2 E0 with e = NOISE_STEP (exactly e^2 |slope| for a quadratic energy, 1e-4 |slope|); where it
+#: exceeds NOISE_FRACTION |slope|, the energy cannot resolve the step and the residual norm
+#: decides, and the step is not lengthened.
 NOISE_STEP = 1e-2
 NOISE_FRACTION = 1e-2
 
@@ -54,7 +57,8 @@ def energy_line_search(p, opt, du, E0: float, slope: float, res: float, lifted: 
     left in ``p.u``; on failure ``p.u`` is restored.
 
     Energy (Armijo) while the energy can resolve the predicted decrease; near convergence |slope|
-    falls below the energy's round-off and the test switches to a decrease of the residual norm.
+    falls below the energy's round-off and the test switches to a decrease of the residual norm
+    (measured where the Armijo test fails or |slope| < 1e-8 |E0|, :data:`NOISE_FRACTION`).
     Guard: finite energy (J > 0 at the energy's quadrature points) and ``p.admissible()`` (J > 0
     at the history points too: Psi_plus there feeds the history; NaN would poison it)."""
     u = p.u.vec
