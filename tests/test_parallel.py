@@ -37,12 +37,14 @@ def serial(tmp_path_factory):
 
 
 def _strip_times(x):
-    """``x`` without the measurements of the process that ran it: times, and the peak memory (the
+    """``x`` without the measurements of the process that ran it: times, the peak memory (the
     largest resident set of that process so far, which depends on what else it ran: a case run
-    in the test process counts every earlier test of it)."""
+    in the test process counts every earlier test of it), and the solver's safeguard counters
+    (``counters``: they count from the process's start, a resumed run from the resume, as
+    :meth:`ngtmc.simulation.records.RunRecords.counters` says)."""
     if isinstance(x, dict):
         return {k: _strip_times(v) for k, v in x.items()
-                if not (k.endswith("time_s") or k in ("time_split_s", "peak_memory_mb"))}
+                if not (k.endswith("time_s") or k in ("time_split_s", "peak_memory_mb", "counters"))}
     if isinstance(x, list):
         return [_strip_times(v) for v in x]
     return x
