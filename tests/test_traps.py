@@ -207,3 +207,50 @@ def test_gmres_function_tolerance_is_absolute():
     assert np.linalg.norm(ex) > 1e-9 and np.linalg.norm(absolute.FV().NumPy()) == 0.0
     relative = GMResSolver(mat=a.mat, pre=pre, tol=1e-6, atol=1e-300, maxiter=200, printrates=False).Solve(rhs=f.vec)
     assert np.linalg.norm(relative.FV().NumPy() - ex) <= 1e-5 * np.linalg.norm(ex)
+
+
+def test_an_energy_on_facets_integrates_to_zero_but_the_same_bilinear_form_does_not():
+    """A ``Variation`` (energy) over ``dx(skeleton=True)`` or ``dx(element_boundary=True)`` is
+    accepted and silently contributes nothing: energy and residual zero, the tangent zero to
+    round-off (NGSolve 6.2.2608, measured; not in NGSOLVE_NOTES.md). The quadratic
+    energy 1/2 sum over interior edges |e| |[[grad u]]|^2 (the jump term a regulariser of linear
+    void elements would need: the paper L-panel stalls on a squeezed P1 void layer,
+    benchmarks/results/l_panel-paper-stall-diagnosis-20261207T153000Z.md) is assembled correctly as
+    a bilinear form on the skeleton: checked against the sum over edges of the element gradients."""
+    from netgen.geom2d import unit_square
+    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.3))
+    fes = ngs.VectorH1(mesh, order=1, dgjumps=True)
+    g = ngs.GridFunction(fes)
+    g.Set(ngs.CF((ngs.x * ngs.y, ngs.x ** 2)))
+    # by hand: the P1 gradient of each triangle, the jump across each interior edge
+    pts = np.array([v.point for v in mesh.vertices])
+    ux = np.stack([g.vec.FV().NumPy()[list(fes.GetDofNrs(ngs.NodeId(ngs.VERTEX, i)))] for i in range(mesh.nv)])
+    grads, edges = [], {}
+    for k, el in enumerate(mesh.Elements(ngs.VOL)):
+        v = [x.nr for x in el.vertices]
+        A = np.array([pts[v[1]] - pts[v[0]], pts[v[2]] - pts[v[0]]])
+        dU = np.array([ux[v[1]] - ux[v[0]], ux[v[2]] - ux[v[0]]])
+        grads.append(np.linalg.solve(A, dU).T)      # grad u, rows: components
+        for a, b in ((v[0], v[1]), (v[1], v[2]), (v[2], v[0])):
+            edges.setdefault(frozenset((a, b)), []).append(k)
+    exact = sum(0.5 * np.linalg.norm(pts[a] - pts[b]) * np.sum((grads[ks[0]] - grads[ks[1]]) ** 2)
+                for e, ks in edges.items() if len(ks) == 2 for a, b in [tuple(e)])
+    assert exact > 1e-3
+    u, v = fes.TnT()
+    b = ngs.BilinearForm(fes)
+    b += ngs.InnerProduct(ngs.Grad(u) - ngs.Grad(u).Other(), ngs.Grad(v) - ngs.Grad(v).Other()) * ngs.dx(skeleton=True)
+    b.Assemble()
+    w = g.vec.CreateVector()
+    w.data = b.mat * g.vec
+    assert 0.5 * ngs.InnerProduct(g.vec, w) == pytest.approx(exact, rel=1e-10)
+    # the trap: the same energy as a Variation is zero, and so are its residual and tangent
+    u = fes.TrialFunction()
+    jump = ngs.Grad(u) - ngs.Grad(u).Other()
+    for measure in (ngs.dx(skeleton=True), ngs.dx(element_boundary=True)):
+        a = ngs.BilinearForm(fes)
+        a += ngs.Variation(0.5 * ngs.InnerProduct(jump, jump) * measure)
+        assert a.Energy(g.vec) == 0.0
+        a.Apply(g.vec, w)
+        assert w.Norm() == 0.0
+        a.AssembleLinearization(g.vec)   # zero to round-off, against entries of order one in b's matrix
+        assert np.abs(np.asarray(a.mat.COO()[2])).max() < 1e-12 * np.abs(np.asarray(b.mat.COO()[2])).max()
