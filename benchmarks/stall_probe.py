@@ -113,10 +113,14 @@ def analyse(c: dict, eigenvalues: int = 6) -> dict:
                 labels[d].add(el.mat)
     label = np.array(["+".join(sorted(s)) for s in labels], dtype=object)
 
-    def shares(x):
+    def shares(x, floor):
+        """Each region's share of |x|^2 on the free dofs, to four digits, those of at least ``floor``."""
         x2 = np.where(free, x, 0.0) ** 2
         tot = x2.sum()
-        return {k: float(x2[label == k].sum() / tot) for k in sorted(set(label[free]))} if tot > 0 else {}
+        if not tot > 0:
+            return {}
+        out = {k: x2[label == k].sum() / tot for k in sorted(set(label[free]))}
+        return {k: round(float(v), 4) for k, v in out.items() if v >= floor}
 
     # vertices: the vertex dofs of each component
     dim = mesh.dim
@@ -146,13 +150,11 @@ def analyse(c: dict, eigenvalues: int = 6) -> dict:
     for j in np.argsort(vals):
         x = np.zeros(fes.ndof)
         x[f] = vecs[:, j]
-        sh = shares(x)
-        modes.append({"eigenvalue": float(vals[j]), "regions": {k: round(v, 4) for k, v in sh.items() if v >= 1e-3},
+        modes.append({"eigenvalue": float(vals[j]), "regions": shares(x, 1e-3),
                       "top_vertices": [t["vertex"] for t in top(x, 5)]})
     return {"residual_norm_N": float(np.linalg.norm(r[free])), "correction_norm_mm": float(np.linalg.norm(du[free])),
             "linear_residual_N": float(np.linalg.norm((c["K"] @ du + r)[free])),
-            "residual_shares": {k: round(v, 4) for k, v in shares(r).items() if v >= 1e-4},
-            "correction_shares": {k: round(v, 4) for k, v in shares(du).items() if v >= 1e-4},
+            "residual_shares": shares(r, 1e-4), "correction_shares": shares(du, 1e-4),
             "residual_vertices": top(r), "correction_vertices": top(du), "det_F_range": dets, "modes": modes}
 
 
@@ -173,7 +175,13 @@ def main(argv=None) -> int:
               "git": git_state(), "study": meta["study"], "resolution": meta["resolution"],
               "overrides": meta.get("overrides"), "at": a.at, **res}
     fmt = lambda d: ", ".join(f"{k} {v:.3g}" for k, v in d.items())
-    lines = [f"### Stall probe: {meta['study']}, {meta['resolution']} ({stamp()})", "",
+    when = stamp()
+
+    def vertices(rows, what):
+        return (["", f"| vertex | at (mm) | u (mm) | regions | {what} |", "|---:|:---|:---|:---|---:|"]
+                + [f"| {t['vertex']} | {t['x_mm']} | {t['u_mm']} | {t['regions']} | {t['norm']:.3e} |" for t in rows])
+
+    lines = [f"### Stall probe: {meta['study']}, {meta['resolution']} ({when})", "",
              f"`{record['command']}`", "", f"{git_text(record)}; run overrides {meta.get('overrides')}; at {a.at}.", "",
              f"Residual on the free dofs {res['residual_norm_N']:.3e} N; Newton correction {res['correction_norm_mm']:.3e} mm "
              f"(linear residual {res['linear_residual_N']:.1e} N).", "",
@@ -182,11 +190,8 @@ def main(argv=None) -> int:
              "* det F (element means) by region: " + ", ".join(f"{k} {lo:.3g} to {hi:.3g}" for k, (lo, hi) in res["det_F_range"].items()),
              "", "| eigenvalue (N/mm) | mode's regions (share of its norm^2) | its largest vertices |", "|---:|:---|:---|"]
     lines += [f"| {m['eigenvalue']:.4g} | {fmt(m['regions'])} | {m['top_vertices']} |" for m in res["modes"]]
-    lines += ["", "| vertex | at (mm) | u (mm) | regions | residual (N) |", "|---:|:---|:---|:---|---:|"]
-    lines += [f"| {t['vertex']} | {t['x_mm']} | {t['u_mm']} | {t['regions']} | {t['norm']:.3e} |" for t in res["residual_vertices"]]
-    lines += ["", "| vertex | at (mm) | u (mm) | regions | correction (mm) |", "|---:|:---|:---|:---|---:|"]
-    lines += [f"| {t['vertex']} | {t['x_mm']} | {t['u_mm']} | {t['regions']} | {t['norm']:.3e} |" for t in res["correction_vertices"]]
-    write_record(a.out, f"stall-probe-{meta['study']}-{stamp()}", record, lines, shown=0)
+    lines += vertices(res["residual_vertices"], "residual (N)") + vertices(res["correction_vertices"], "correction (mm)")
+    write_record(a.out, f"stall-probe-{meta['study']}-{when}", record, lines, shown=0)
     return 0
 
 
