@@ -37,7 +37,9 @@ Geometry (mm; the paper's Fig. 12 is not available, sizes it does not give are o
   arm's lower face (y = 250); same material, no fracture. Its flat bottom edge is loaded (upward
   displacement imposed, tangential held); the recorded force is the vertical reaction there;
 * void (rho = 0): the box x in [load_x - R - 10, 500] from the indenter's flat edge to the arm,
-  minus the indenter; no regulariser (paper), so linear triangles throughout, as the paper;
+  minus the indenter; no regulariser (paper), so linear triangles throughout, as the paper
+  (``kbar_r`` > 0 puts the Hessian regulariser of Eq. 3 on the void, k_r = kbar_r L^2 K0 with
+  L = ``reg_length`` = 500 mm, and order-2 displacements there; an option, not the paper's scene);
 * mesh: refined band x in [``band_left`` = 150, 260] x y in [230, 320] around the expected crack
   path (``h_band``), contact zone ``h_contact``, void and indenter ``h_void``, the rest ``h_far``.
 
@@ -132,7 +134,7 @@ SUMMARY = (
 #: Parameters added after runs of this study were recorded, at the default those runs had in
 #: effect (``band_left``: the band from x = 150 mm): left out of the parameter hash at that default,
 #: so that those runs still resume (:func:`ngtmc.study.parameters.added_at_default`).
-ADDED_AT_DEFAULT = ("band_left",)
+ADDED_AT_DEFAULT = ("band_left", "kbar_r", "reg_length")
 
 PARAMETERS = {
     "E": (2.58e4, "MPa", "Young's modulus E0 (Table 2)"),
@@ -151,6 +153,9 @@ PARAMETERS = {
                   "our choice, around the expected crack path)"),
     "clamp_strip": (25.0, "mm", "height of the strip along the clamped edge without fracture (our choice)"),
     "k_u": (50.0, "1/N", "step-size sensitivity of Eq. 20, W_f per unit thickness (paper: 50)"),
+    "kbar_r": (0.0, "-", "void regulariser factor of Eq. 3, k_r = kbar_r L^2 K0; 0: none and linear triangles "
+               "(paper); > 0: the regulariser on the void, whose displacement is then of order 2"),
+    "reg_length": (500.0, "mm", "characteristic length L of the regulariser (the panel's width)"),
     **SOLVER_PARAMETERS,
     "load_cases": ("both", "-", "'both' (the paper's load-unload-reload case 'main' and the monotonic case 'monotonic'), "
                    "'cyclic' (case 'main' only) or 'monotonic' (case 'monotonic' only, as in the l0 sweep)"),
@@ -201,14 +206,25 @@ def build_scene(p: dict) -> ngtmc.Scene:
         load=ngtmc.DisplacementLoad("load", direction="y", hold_tangential=True),
         density={"void": 0.0},
         fracture_regions=FRACTURE_REGIONS,
-        regulariser=None,
+        **_regulariser(p),
         gamma0=float(p["gamma0"]),
         residual_stiffness=float(p["residual_stiffness"]),
         thickness=float(p["thickness"]),
-        order=1,
         name="l_panel",
         **_split(p),
     )
+
+
+def _regulariser(p: dict) -> dict:
+    """No regulariser and linear triangles (paper), or with ``kbar_r`` > 0 the Hessian regulariser
+    of Eq. 3 on the void, whose displacement is then of order 2 (order 1 elsewhere)."""
+    kbar_r = float(p.get("kbar_r", 0.0))
+    if kbar_r < 0:
+        raise ValueError(f"l_panel: kbar_r = {kbar_r!r} must be >= 0 (0: no regulariser)")
+    if kbar_r == 0:
+        return dict(regulariser=None, order=1)
+    return dict(regulariser=ngtmc.Regulariser("void", length=float(p.get("reg_length", 500.0)), kbar_r=kbar_r),
+                order=None, variable_order=True)
 
 
 def _split(p: dict) -> dict:

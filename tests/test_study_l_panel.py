@@ -372,3 +372,19 @@ def test_band_left_moves_the_refined_band_only():
     assert ne_wide > ne
     with pytest.raises(ValueError, match="band_left"):
         S.cases(study_parameters(S, "quick", {"band_left": 250})[1])[0].build_scene()
+
+
+def test_void_regulariser_option():
+    """``kbar_r`` = 0 (default, paper): no regulariser and linear triangles; ``kbar_r`` > 0: the
+    Hessian regulariser of Eq. 3 on the void only, with k_r = kbar_r L^2 K0 (L = ``reg_length``)
+    and order-2 displacements there (order 1 elsewhere); a negative factor is refused."""
+    _, p = study_parameters(S, "quick")
+    scene = S.cases(p)[0].build_scene()
+    assert scene.regulariser is None and scene.displacement_order == 1
+    _, p = study_parameters(S, "quick", {"kbar_r": 1e-6, "reg_length": 250.0})
+    scene = S.cases(p)[0].build_scene()
+    reg = scene.regulariser
+    assert (reg.regions, reg.kbar_r, reg.length, reg.damping) == ("void", 1e-6, 250.0, "none")
+    assert scene.order is None and scene.variable_order and scene.displacement_order == 2
+    with pytest.raises(ValueError, match="kbar_r"):
+        S.cases(study_parameters(S, "quick", {"kbar_r": -1e-6})[1])[0].build_scene()
