@@ -69,10 +69,13 @@ quick, single-pass              17.94 kN at 6.3 [1] 23.62 kN at 6.46     quick
 quick, path following           18.08 kN at 6.3 [1] 18.60 kN at 6.311    quick_path_following_no_ceiling
 medium, path following          16.84 kN at 6.274   8.68 kN at 6.492     medium_path_following_paper_sched...
 paper, path following           16.01 kN at 6.248   8.83 kN at 6.640     paper_path_following_completed_...
+paper, p.f., kbar_r = 1e-6 [2]  16.00 kN at 6.248   9.05 kN at 6.635     paper_path_following_cyclic_vo...
 ==============================  ==================  ===================  ==================================
 
-[1] at the turning point, before the peak. Case monotonic: 22.96 kN at 6.451 mm at quick
-single-pass (+43.5 % against Ambati's 16 kN; ``quick_monotonic``), 18.62 kN with path following,
+[1] at the turning point, before the peak. [2] the void regulariser (``kbar_r``); without it the
+same run on the current code stalls and fails at 6.209 mm in the first crack run
+(``paper_path_following_cyclic_failed_step_242``; docs/performance.md).
+Case monotonic: 22.96 kN at 6.451 mm at quick single-pass (+43.5 % against Ambati's 16 kN; ``quick_monotonic``), 18.62 kN with path following,
 18.63 kN at medium, **15.72 kN at the paper's resolution (-1.7 %)** (``paper_path_following_partial``).
 
 * Irreversibility holds: once unloading has settled, W_f and max alpha stay constant and the
