@@ -113,7 +113,6 @@ from functools import partial
 import numpy as np
 
 import ngtmc
-from ngtmc.study import data_path
 from ngtmc.study import Case
 from ngtmc.study import SOLVER_PARAMETERS, simulation_options
 from ngtmc.studies._l_panel_geometry import (_segment, build_mesh, effective_gap,  # noqa: F401 (interface)
@@ -122,6 +121,8 @@ from ngtmc.studies._l_panel_figures import (L0_SWEEP_KEYS, MEDIUM_PAPER_SCHEDULE
                                            SIGMA_T, WHOLE_WIDTH_KEYS, WINKLER_PEAK_BAND, at2_strength, figures,
                                            l0_for_strength)
 from ngtmc.studies._l_panel_results import monotonic_numbers, phases
+from ngtmc.studies._l_panel_references import (AMBATI_SOURCE, WINKLER_A_SOURCE,  # noqa: F401 (interface)
+                                              WINKLER_BAND_SOURCE, references)
 
 NAME = "l_panel"
 TITLE = "L-shaped panel: load, unload, reload through an indenter"
@@ -302,35 +303,6 @@ def cases(p: dict) -> list[Case]:
             parameters={"k_u": float(p["k_u"]), "du_max": du_max, "l0": float(p["l0"])},
         ))
     return out
-
-
-WINKLER_BAND_SOURCE = ("Winkler L-shaped panel experiments, scatter band (Winkler et al. 2004 IJNAMG Fig. 10 and "
-                       "Winkler et al. 2001 Fig. 5), digitised; file from github fpled/MYCODE, examples/phasefield/"
-                       "dataLshapedPanelWinkler/force_displacement_Win04_fig10_Win01_fig5.csv @ 626a87f0")
-WINKLER_A_SOURCE = ("Winkler PhD thesis (2001), Abb. 7.12, test series A; file from github PSAAPGroupLinder/"
-                    "lShapedPanelBenchmark, experimental/Winkler_Abb-7.12_Versuchsreihe-A.csv @ 70a51eeb")
-
-
-def references(p: dict) -> list[dict]:
-    """Winkler band and series A (whole 100 mm panel, N), shifted by the gap, scaled to the scene
-    thickness (thickness / 100 mm)."""
-    import pandas as pd
-    gap = effective_gap(p)
-    scale = float(p["thickness"]) / 100.0
-    band = pd.read_csv(data_path("lshape_winkler_experiment_envelope_kN_mm.csv"))
-    a = pd.read_csv(data_path("lshape_winkler_experiment_seriesA_N_mm.csv"))
-    unit = "N" if scale == 1.0 else f"N per {float(p['thickness']):g} mm"
-    return [
-        {"label": "Winkler experiments, scatter band (shifted by the gap)", "source": WINKLER_BAND_SOURCE,
-         "kind": "band", "x": (band["U_mm"] + gap).tolist(), "y_lower": (1000 * scale * band["F_lb_kN"]).tolist(),
-         "y_upper": (1000 * scale * band["F_ub_kN"]).tolist(), "x_unit": "mm", "y_unit": unit},
-        {"label": "Winkler series A (shifted by the gap)", "source": WINKLER_A_SOURCE, "kind": "curve",
-         "x": (a["#x"] + gap).tolist(), "y": (scale * a["Winkel-A"]).tolist(), "x_unit": "mm", "y_unit": unit},
-    ]
-
-
-AMBATI_SOURCE = ("Ambati et al. 2015 (Comput. Mech. 55), Fig. 19, L-shaped panel with the same AT-2 parameters: "
-                 "first-loading peak about 16 kN, read as the whole 100 mm panel (see the study docstring)")
 
 
 def targets(p: dict) -> list[dict]:
