@@ -75,8 +75,8 @@ paper, p.f., kbar_r = 1e-6 [2]  16.00 kN at 6.248   9.05 kN at 6.635     paper_p
 [1] at the turning point, before the peak. [2] the void regulariser (``kbar_r``); without it the
 same run on the current code stalls and fails at 6.209 mm in the first crack run
 (``paper_path_following_cyclic_failed_step_242``; docs/performance.md).
-Case monotonic: 22.96 kN at 6.451 mm at quick single-pass (+43.5 % against Ambati's 16 kN; ``quick_monotonic``), 18.62 kN with path following,
-18.63 kN at medium, **15.72 kN at the paper's resolution (-1.7 %)** (``paper_path_following_partial``).
+Case monotonic: 22.96 kN at 6.451 mm at quick single-pass (+43.5 % against Ambati's 16 kN;
+``quick_monotonic``), 18.62 kN with path following, 18.63 kN at medium, **15.72 kN at the paper's resolution (-1.7 %)** (``paper_path_following_partial``).
 
 * Irreversibility holds: once unloading has settled, W_f and max alpha stay constant and the
   reloading curve retraces the unloading one. The single-pass scheme's damage lags one step
@@ -221,14 +221,13 @@ def build_scene(p: dict) -> ngtmc.Scene:
 
 def _regulariser(p: dict) -> dict:
     """No regulariser and linear triangles (paper), or with ``kbar_r`` > 0 the Hessian regulariser
-    of Eq. 3 on the void, whose displacement is then of order 2 (order 1 elsewhere)."""
-    kbar_r = float(p.get("kbar_r", 0.0))
-    if kbar_r < 0:
-        raise ValueError(f"l_panel: kbar_r = {kbar_r!r} must be >= 0 (0: no regulariser)")
+    of Eq. 3 on the void, whose displacement is then of order 2 (order 1 elsewhere); ``Regulariser``
+    refuses a negative factor."""
+    kbar_r = float(p.get("kbar_r", PARAMETERS["kbar_r"][0]))
     if kbar_r == 0:
         return dict(regulariser=None, order=1)
-    return dict(regulariser=ngtmc.Regulariser("void", length=float(p.get("reg_length", 500.0)), kbar_r=kbar_r),
-                order=None, variable_order=True)
+    length = float(p.get("reg_length", PARAMETERS["reg_length"][0]))
+    return dict(regulariser=ngtmc.Regulariser("void", length=length, kbar_r=kbar_r), order=None, variable_order=True)
 
 
 def _split(p: dict) -> dict:
