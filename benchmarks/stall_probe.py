@@ -35,7 +35,7 @@ class _Captured(BaseException):
     failed steps do not catch it)."""
 
 
-def capture(folder: Path, at: str = "relaxation", threads: int = 2) -> dict:
+def capture(folder: Path, at: str = "relaxation", threads: int = 2, study: str | None = None) -> dict:
     """Resume a copy of the run ``folder`` and return the arrays of the K-th displacement Newton
     direction in displacement relaxations (``at = 'relaxation[:K]'``, K = 1 by default) or of the
     ``at``-th displacement Newton direction: K (scipy CSR), r, du, u, the free mask and the space."""
@@ -84,7 +84,7 @@ def capture(folder: Path, at: str = "relaxation", threads: int = 2) -> dict:
         iteration.Iteration.relax_u, newton.lifted_direction, newton.DisplacementNewton.solve = (
             relax_u, lifted_direction, solve)
         try:
-            ngtmc.run_study(meta["study"], meta["resolution"], work, report=False, resume=True, progress=False,
+            ngtmc.run_study(study or meta["study"], meta["resolution"], work, report=False, resume=True, progress=False,
                             threads=threads, vtk=False)
         except _Captured:
             pass
@@ -166,9 +166,12 @@ def main(argv=None) -> int:
                          "displacement relaxations) or N (the N-th displacement Newton direction after resuming)")
     ap.add_argument("--eigenvalues", type=int, default=6)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--study", default=None,
+                    help="the study file the run came from, where its name is not a registered study "
+                         "(e.g. benchmarks/mpi_study.py)")
     ap.add_argument("--out", default=str(RESULTS))
     a = ap.parse_args(argv)
-    c = capture(Path(a.folder), a.at, a.threads)
+    c = capture(Path(a.folder), a.at, a.threads, a.study)
     res = analyse(c, a.eigenvalues)
     meta = c["meta"]
     record = {"command": "python -m benchmarks.stall_probe " + " ".join(sys.argv[1:] if argv is None else argv),
