@@ -31,11 +31,11 @@ def stamp() -> str:
 
 
 def run_study(study: str, resolution: str, folder: Path, threads: int, sets=(), env: dict | None = None,
-              launcher=NGTMC) -> dict:
+              launcher=NGTMC, stdout: bool = False) -> dict:
     """``ngtmc run STUDY -r RESOLUTION -o FOLDER --threads N --no-vtk --no-report --quiet`` with
     ``--set`` for each of ``sets`` in a fresh process (``launcher``: the command before ``run``;
-    ``env``: variables set on top of this process's). Returns ``command_s`` (s), ``returncode`` and,
-    for a failed run, ``stderr_tail``."""
+    ``env``: variables set on top of this process's). Returns ``command_s`` (s), ``returncode``,
+    for a failed run ``stderr_tail``, and with ``stdout`` the run's standard output."""
     cmd = [*launcher, "run", study, "-r", resolution, "-o", str(folder), "--threads", str(threads),
            "--no-vtk", "--no-report", "--quiet"]
     for s in sets:
@@ -45,6 +45,8 @@ def run_study(study: str, resolution: str, folder: Path, threads: int, sets=(), 
     out = {"command_s": time.perf_counter() - t0, "returncode": proc.returncode}
     if proc.returncode != 0:
         out["stderr_tail"] = proc.stderr[-2000:]
+    if stdout:
+        out["stdout"] = proc.stdout
     return out
 
 

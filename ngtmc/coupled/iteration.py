@@ -319,10 +319,13 @@ class Iteration:
             self.reac = reac = ranks.masked_norm(rc, self.dir_ux)
             self.scale = ranks.masked_norm(rc, self.moved_ux)
             if C.DEBUG:
-                print(f"    gmres {n.lin.gmres_iterations[-2:]}", flush=True)
+                # H_n = max(H_{n-1}, Psi_plus): points where Psi_plus wins, and changes since the last (benchmarks/history_branches.py)
+                branch, last = s.psi_plus_values() > s.H_committed, getattr(self, "branch", None)
+                changed, self.branch = (-1 if last is None else int(np.sum(branch != last))), branch
                 print(f"    [{time.perf_counter() - self.t_start:7.1f}s] coupled it {it} lam {lam:.8g} res_u {self.res_u:.3e} (ref {max(reac, self.r_ref):.3e}) "
                       f"res_a {self.res_a:.3e} (tol {self.tol_a:.3e}) g {g:.3e} "
-                      f"held {int(np.sum(held == -1))}/{int(np.sum(held == 1))}", flush=True)
+                      f"held {int(np.sum(held == -1))}/{int(np.sum(held == 1))} "
+                      f"branch {int(branch.sum())} changed {changed} gmres {n.lin.gmres_iterations[-2:]}", flush=True)
             if not lifted:
                 if self.r_ref == 0.0:
                     self.r_ref = self.res_u
