@@ -39,7 +39,7 @@ def capture(folder: Path, at: str = "relaxation", threads: int = 2, study: str |
     """Resume a copy of the run ``folder`` and return the arrays of the K-th displacement Newton
     direction in displacement relaxations (``at = 'relaxation[:K]'``, K = 1 by default) or of the
     ``at``-th displacement Newton direction: K (scipy CSR), r, du, u, the free mask and the space."""
-    import scipy.sparse as sp
+    from ngtmc.discrete import to_scipy
 
     import ngtmc
     import ngtmc.coupled.iteration as iteration
@@ -71,9 +71,7 @@ def capture(folder: Path, at: str = "relaxation", threads: int = 2, study: str |
         state["count"] += 1
         if state["count"] == nth:
             p = state["problem"]
-            rows, cols, vals = mat.COO()
-            n = mat.height
-            out.update(K=sp.csr_matrix((np.asarray(vals), (np.asarray(rows), np.asarray(cols))), shape=(n, n)),
+            out.update(K=to_scipy(mat),
                        r=r.FV().NumPy().copy(), du=du.FV().NumPy().copy(), u=p.u.vec.FV().NumPy().copy(),
                        free=np.asarray(p.free, dtype=bool).copy(), fes=p.u.space)
             raise _Captured

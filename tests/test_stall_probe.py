@@ -6,9 +6,9 @@ from __future__ import annotations
 import ngsolve as ngs
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 import ngtmc
+from ngtmc.discrete import to_scipy
 from benchmarks.stall_probe import analyse
 from scenes import two_blocks
 
@@ -17,9 +17,8 @@ from scenes import two_blocks
 def capture():
     s = ngtmc.Solver(two_blocks(gap=0.3, maxh=0.2, void_maxh=0.08, kbar_r=None, order=1), compile=False)
     s.a_u.AssembleLinearization(s.u.vec)
-    rows, cols, vals = s.a_u.mat.COO()
     n = s.fes_u.ndof
-    K = sp.csr_matrix((np.asarray(vals), (np.asarray(rows), np.asarray(cols))), shape=(n, n))
+    K = to_scipy(s.a_u.mat, (n, n))
     free = np.asarray(s._free_np, dtype=bool)
     return {"K": K, "free": free, "u": np.zeros(n), "fes": s.fes_u, "solver": s}
 

@@ -15,15 +15,11 @@ import math
 
 import numpy as np
 import ngsolve as ngs
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ngtmc.discrete import to_scipy
+
 __all__ = ["HelmholtzFilter"]
-
-
-def _csr(mat, shape) -> sp.csr_matrix:
-    rows, cols, vals = mat.COO()
-    return sp.csr_matrix((np.asarray(vals), (np.asarray(rows), np.asarray(cols))), shape=shape)
 
 
 class HelmholtzFilter:
@@ -51,8 +47,8 @@ class HelmholtzFilter:
         ne, nv = Q.ndof, V.ndof
         if ne != mesh.ne:
             raise ValueError(f"HelmholtzFilter: {ne} element constants for {mesh.ne} elements")
-        self._K = spla.splu(_csr(k.mat, (nv, nv)).tocsc())
-        self._B = _csr(b.mat, (nv, ne))
+        self._K = spla.splu(to_scipy(k.mat, (nv, nv)).tocsc())
+        self._B = to_scipy(b.mat, (nv, ne))
         #: element areas (volumes in 3D), mm^2 (mm^3): B^T 1 summed over the element's nodes
         self.areas = np.asarray(self._B.sum(axis=0)).ravel()
 
