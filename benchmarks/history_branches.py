@@ -49,7 +49,7 @@ def bins(counts: list[list[int]], min_evaluations: int = 10) -> dict:
     later = [k for c in long for k in c[1:]]
     table = {label: sum(1 for k in later if k >= lo and (hi is None or k <= hi)) for label, lo, hi in BINS}
     return {"solves": len(counts), "evaluations": sum(len(c) for c in counts), "long_solves": len(long),
-            "long_evaluations": sum(len(c) for c in long), "first_of_a_solve": len(long), "by_changed_points": table,
+            "long_evaluations": sum(len(c) for c in long), "by_changed_points": table,
             "largest_change": max(later, default=0)}
 
 
@@ -79,7 +79,7 @@ def main(argv=None) -> int:
              f"evaluations; {counts['long_solves']} solves of {a.min_evaluations} or more evaluations, "
              f"{counts['long_evaluations']} evaluations:", "",
              "| history points that changed branch since the evaluation before | evaluations |", "|:---|---:|",
-             f"| (first of a solve) | {counts['first_of_a_solve']} |",
+             f"| (first of a solve) | {counts['long_solves']} |",
              *[f"| {label} | {n} |" for label, n in counts["by_changed_points"].items()], "",
              f"The largest change: {counts['largest_change']} points."]
     write_record(a.out, f"history-branches-{name}-{a.resolution}-{when}", record, lines)
