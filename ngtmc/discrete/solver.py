@@ -28,6 +28,7 @@ from ngtmc.model import deformation_gradient, gamma_interpolation, gc_interpolat
 from ngtmc.discrete.boundary_conditions import BoundaryConditions
 from ngtmc.discrete.displacement_energy import DisplacementEnergy
 from ngtmc.discrete.energy_forms import _ExternalWork
+from ngtmc.discrete.guard import gradient_at_points
 from ngtmc.discrete.phase_field import PhaseFieldHistory
 from ngtmc.discrete.newton import DISPLACEMENT_RTOL, NewtonOptions, NewtonResult
 from ngtmc.scene import Ranks
@@ -195,6 +196,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
         self.H_committed = np.zeros(self.irs.ndof)
         self._psi_plus_cf = None   # Psi_plus(u), compiled at its first use (psi_plus_values)
         self._J_cf = None          # det F of u, built at its first use (J_values)
+        self._J_op = None          # grad u at the guard points (ngtmc.discrete.guard), likewise
         if frac:
             self.fes_a = ngs.H1(mesh, order=1, definedon=mesh.Materials(self.regions.fracture_regex))
             self.alpha = ngs.GridFunction(self.fes_a, name="alpha")
@@ -264,6 +266,7 @@ class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
             self._build_loads()
         self._inv = None
         self._inv_alpha = None
+        self._J_op = None   # grad u at the guard points, built at the next J_values
         self._r = self.u.vec.CreateVector()
         self._du = self.u.vec.CreateVector()
         self._w = self.u.vec.CreateVector()
@@ -296,8 +299,12 @@ class Solver(BoundaryConditions, DisplacementEnergy, PhaseFieldHistory):
 
     # ================================================================= J and the fracture box
     def J_values(self) -> np.ndarray:
-        """det F at the guard quadrature points (dimensionless), element by element; a view of a
-        scratch vector that the next call overwrites."""
+        """det F at the guard quadrature points (dimensionless), element by element
+        (:mod:`ngtmc.discrete.guard`); an array the caller must not keep past the next call."""
+        if self._J_op is None:   # the sparse matrix of grad u at the points (ngtmc.discrete.guard), once per mesh
+            self._J_op = gradient_at_points(self.fes_u, self._guard_irs, self.dim, self.ranks.parallel) or False
+        if self._J_op:
+            return self._J_op.det_F(self.u.vec.FV().NumPy())
         if self._J_cf is None:   # built once: building it took about as long as evaluating it
             self._J_cf = ngs.Det(deformation_gradient(self.u))
         self._scratch_guard.Interpolate(self._J_cf)
