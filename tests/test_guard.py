@@ -58,6 +58,8 @@ def test_the_matrix_gives_the_interpolated_det_f_point_by_point(kind, order):
     assert J.shape == ref.shape and np.ptp(ref) > 1e-2
     assert np.max(np.abs(J - ref)) < 1e-12
     assert s.min_J() == pytest.approx(ref.min(), abs=1e-12)
+    counted = guard.counted_entries(s.fes_u, s._guard_irs, s.dim)
+    assert s._J_op.matrix.nnz <= counted <= guard.estimated_entries(s.fes_u, s._guard_irs, s.dim)
 
 
 @pytest.mark.parametrize("kind", ["trig", "hex"])
@@ -107,7 +109,7 @@ def test_interpolation_where_the_matrix_is_not_built(monkeypatch):
     t = ngtmc.Solver(_scene("trig", 2), compile=False)
     t.u.Set(_field(2))
     assert np.max(np.abs(t.J_values() - J)) < 1e-12
-    monkeypatch.setattr(guard, "GUARD_MAX_ENTRIES", guard.estimated_entries(t.fes_u, t._guard_irs, 2) - 1)
+    monkeypatch.setattr(guard, "GUARD_MAX_ENTRIES", guard.counted_entries(t.fes_u, t._guard_irs, 2) - 1)
     small = ngtmc.Solver(_scene("trig", 2), compile=False)
     small.u.Set(_field(2))
     assert np.max(np.abs(small.J_values() - J)) < 1e-12 and small._J_op is False

@@ -6,12 +6,12 @@ holds it for the whole mesh: row (i, j, point) of :class:`GradientAtPoints` give
 that point, the points in the order of the guard's ``IntegrationRuleSpace`` (element by element,
 as NGSolve's ``Interpolate`` fills it). det F = det(I + grad u) is then one sparse product and a
 few array operations. Measured (``python -m benchmarks.guard``): on the quick three-point bending
-(51384 points, one thread) 1.0 ms against 8.6 ms for ``Interpolate`` of det F, at the paper's
-resolution (179628 points, two threads) 2.7 against 17.8 ms; the values agree to 2e-14.
+(51384 points, one thread) 0.67 against 7.46 ms for ``Interpolate`` of det F, at the paper's
+resolution (179628 points, two threads) 3.26 against 16.88 ms; the values agree to 5e-15.
 
 The matrix is built from a mixed form (the points' weights divided out), once per mesh, where
-its estimated size stays below GUARD_MAX_ENTRIES; elsewhere (and on a mesh distributed over MPI
-ranks, or with ``NGTMC_J_GUARD=interpolate``) det F is interpolated as before. Dimensionless.
+its size stays below GUARD_MAX_ENTRIES; elsewhere (and on a mesh distributed over MPI ranks, or
+with ``NGTMC_J_GUARD=interpolate``) det F is interpolated as before. Dimensionless.
 """
 from __future__ import annotations
 
@@ -23,17 +23,19 @@ import scipy.sparse as sp
 
 from ngtmc.discrete.sparse import to_scipy
 
-__all__ = ["GradientAtPoints", "gradient_at_points", "estimated_entries", "GUARD_MAX_ENTRIES", "GUARD_ENV"]
+__all__ = ["GradientAtPoints", "gradient_at_points", "estimated_entries", "counted_entries", "GUARD_MAX_ENTRIES",
+           "GUARD_ENV"]
 
-#: Largest estimated number of stored entries (guard points x dim^2 x the dofs of one
-#: displacement component on an element of the space's full order) for which the matrix is
-#: built: 12 bytes each, so at most about 120 MB. The paper three-point bending needs 2.3 million
-#: (6.5 million estimated); the paper 3D hemisphere would need far more and interpolates.
+#: Largest number of stored entries (guard points x dim^2 x the dofs of one displacement
+#: component on their element) for which the matrix is built: 12 bytes each, so at most about
+#: 120 MB. The paper three-point bending needs 2.3 million, the quick 3D hemisphere 6.3 million;
+#: the paper 3D hemisphere would need 37 million (counted) and interpolates.
 GUARD_MAX_ENTRIES = 10_000_000
 
 #: environment variable: ``interpolate`` makes every solver interpolate det F (the way before the
 #: matrix; for comparisons, ``python -m benchmarks.guard``)
 GUARD_ENV = "NGTMC_J_GUARD"
+
 
 class GradientAtPoints:
     """grad u at the points of the integration-rule space ``points`` for the vector H1 space
@@ -74,10 +76,20 @@ class GradientAtPoints:
 
 
 def estimated_entries(fes_u, points, dim: int) -> int:
-    """Upper estimate of the stored entries of :class:`GradientAtPoints` (GUARD_MAX_ENTRIES): per
-    row the dofs of one component on a quadrilateral or hexahedron of the space's full order, the
-    largest element of its dimension."""
+    """Upper bound of the stored entries of :class:`GradientAtPoints`, without a loop: per row the
+    dofs of one component on a quadrilateral or hexahedron of the space's full order, the largest
+    element of its dimension."""
     return int(points.ndof) * dim * dim * (int(fes_u.globalorder) + 1) ** dim
+
+
+def counted_entries(fes_u, points, dim: int) -> int:
+    """Upper bound of the stored entries of :class:`GradientAtPoints`, counted element by element
+    (a loop over the elements: where the order varies per element most of them hold far fewer
+    dofs than :func:`estimated_entries` assumes); the product drops the entries whose shape
+    derivative vanishes (an axis-parallel edge), so the matrix holds fewer."""
+    per_type = {et: len(rule) for et, rule in points.GetIntegrationRules().items()}
+    total = sum(len(el.dofs) * per_type[el.type] for el in fes_u.Elements(ngs.VOL))
+    return total * dim   # len(el.dofs) / dim per row, dim^2 rows per point
 
 
 def gradient_at_points(fes_u, points, dim: int, parallel: bool) -> GradientAtPoints | None:
@@ -89,6 +101,7 @@ def gradient_at_points(fes_u, points, dim: int, parallel: bool) -> GradientAtPoi
         raise ValueError(f"{GUARD_ENV}={setting!r}: expected 'matrix' or 'interpolate'")
     if parallel or setting == "interpolate":
         return None
-    if estimated_entries(fes_u, points, dim) > GUARD_MAX_ENTRIES:
+    if (estimated_entries(fes_u, points, dim) > GUARD_MAX_ENTRIES
+            and counted_entries(fes_u, points, dim) > GUARD_MAX_ENTRIES):
         return None
     return GradientAtPoints(fes_u, points, dim)
