@@ -56,7 +56,9 @@ class GradientAtPoints:
                 b = ngs.BilinearForm(trialspace=fes_u, testspace=points)
                 b += ngs.Grad(u)[i, j] * v * dxp
                 b.Assemble()
-                blocks.append(to_scipy(b.mat, (self.n, fes_u.ndof)))
+                block = to_scipy(b.mat, (self.n, fes_u.ndof))
+                block.eliminate_zeros()   # NGSolve stores every component's dofs in each block
+                blocks.append(block)
         #: rows (i, j, point) of du_i/dx_j, dimensionless
         self.matrix = (sp.diags(np.tile(1.0 / weight, dim * dim)) @ sp.vstack(blocks)).tocsr()
 
@@ -85,8 +87,10 @@ def estimated_entries(fes_u, points, dim: int) -> int:
 def counted_entries(fes_u, points, dim: int) -> int:
     """Upper bound of the stored entries of :class:`GradientAtPoints`, counted element by element
     (a loop over the elements: where the order varies per element most of them hold far fewer
-    dofs than :func:`estimated_entries` assumes); the product drops the entries whose shape
-    derivative vanishes (an axis-parallel edge), so the matrix holds fewer."""
+    dofs than :func:`estimated_entries` assumes); the matrix holds fewer where a shape function's
+    derivative vanishes at a point (an edge parallel to an axis). Building it holds one block of
+    dim times its own entries besides (NGSolve's mixed form stores the other components' dofs
+    as zeros)."""
     per_type = {et: len(rule) for et, rule in points.GetIntegrationRules().items()}
     total = sum(len(el.dofs) * per_type[el.type] for el in fes_u.Elements(ngs.VOL))
     return total * dim   # len(el.dofs) / dim per row, dim^2 rows per point
