@@ -376,3 +376,35 @@ def test_a_failed_solve_counts_the_iterations_of_its_displacement_relaxation(mon
     assert calls == [1e-3] and c.relaxations == 1
     assert not r.converged
     assert r.iterations == 1 + 7   # the coupled iteration whose line search failed, and the relaxation's
+
+
+@pytest.mark.parametrize("relax_dissipation", [False, True])
+def test_a_dissipation_solve_relaxes_the_displacement_only_when_asked(monkeypatch, relax_dissipation):
+    """``relax_dissipation`` (default True, RELAX_DISSIPATION): with it off a solve under
+    dissipation control whose line search fails goes on to the residual floor or fails without
+    the displacement relaxation; with it on it relaxes, as a solve at a fixed load always does.
+    A value that is not a bool is an error."""
+    from ngtmc.coupled.iteration import Iteration
+    from ngtmc.coupled.settings import RELAX_DISSIPATION
+    from ngtmc.discrete import NewtonResult
+    assert RELAX_DISSIPATION is True and CoupledNewton(ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))).relax_dissipation
+    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))
+    c = CoupledNewton(s, relax_dissipation=relax_dissipation)
+    assert c.solve(1e-3).converged
+    s.alpha.vec.FV().NumPy()[:] += 0.01
+    monkeypatch.setattr(Iteration, "search", lambda self, dxN, dlam, merit0, scale_u, lam0: (False, lam0, 0.0, math.inf))
+    calls = []
+
+    def relaxation(load):
+        calls.append(load)
+        return NewtonResult(False, 7, 1.0, 0.0, 0.0, message="relaxation failed")
+
+    monkeypatch.setattr(s, "solve_displacement", relaxation)
+    r = c.solve(1e-3, dissipation=1e-6)
+    assert not r.converged
+    assert calls == ([1e-3] if relax_dissipation else []) and c.relaxations == int(relax_dissipation)
+    assert r.iterations == 1 + 7 * relax_dissipation
+    c.solve(1e-3)   # at a fixed load it relaxes either way
+    assert len(calls) == 1 + relax_dissipation
+    with pytest.raises(ValueError, match="relax_dissipation"):
+        CoupledNewton(s, relax_dissipation="no")

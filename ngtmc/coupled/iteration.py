@@ -123,13 +123,13 @@ class Iteration:
                             self.assembly_time, 0)
 
     def relax_u(self) -> bool:
-        """Once per solve, where the coupled iteration stalls or its line search fails: solve
-        R_u = 0 at the current alpha and load by the displacement Newton, which descends the
-        energy (so it leaves an unstable equilibrium of a squeezed void, where the residual
-        merit of the coupled iteration cannot tell a saddle from a minimum); the coupled
-        iteration then goes on from there. True if it converged."""
+        """Once per solve, where the coupled iteration stalls or its line search fails: solve R_u = 0
+        at the current alpha and load by the displacement Newton, which descends the energy (so it
+        leaves an unstable equilibrium of a squeezed void, where the residual merit of the coupled
+        iteration cannot tell a saddle from a minimum); the iteration goes on from there. True if
+        it converged. Under dissipation control only with ``relax_dissipation`` (RELAX_DISSIPATION)."""
         n = self.n
-        if self.relaxed or self.lifted or not n.relax:
+        if self.relaxed or self.lifted or not n.relax or (self.path and not n.relax_dissipation):
             return False
         self.relaxed = True
         n._scatter()

@@ -44,7 +44,7 @@ from ngtmc.discrete import history_pieces, phase_field_piece
 __all__ = ["CoupledNewton", "LINEAR_SOLVERS"]
 
 from ngtmc.coupled.iteration import Iteration
-from ngtmc.coupled.settings import BORDERED, COUPLED_RTOL, FACTOR_REUSE, WEAK_STOP
+from ngtmc.coupled.settings import BORDERED, COUPLED_RTOL, FACTOR_REUSE, RELAX_DISSIPATION, WEAK_STOP
 
 
 class CoupledNewton:
@@ -57,11 +57,13 @@ class CoupledNewton:
     complementarity residual below ``alpha_tol`` (None, the default: the same as that rtol) times
     the residual of a uniform unit alpha (dimensionless); ``max_iterations``: per attempt;
     ``linear_solver``, ``gmres_rtol``, ``gmres_maxsteps``, ``factor_reuse``, ``bordered``: of the linear solves
-    (:class:`~ngtmc.coupled.linear.CoupledLinearSolver`)."""
+    (:class:`~ngtmc.coupled.linear.CoupledLinearSolver`); ``relax_dissipation``: whether solves under
+    dissipation control relax the displacement where they stall (RELAX_DISSIPATION)."""
 
     def __init__(self, solver, alpha_tol: float | None = None, max_iterations: int = 15, linear_solver: str = "block-gmres",
                  gmres_rtol: float = 1e-8, gmres_maxsteps: int = 100, weak_stop: bool = WEAK_STOP,
-                 factor_reuse: bool = FACTOR_REUSE, bordered: bool = BORDERED):
+                 factor_reuse: bool = FACTOR_REUSE, bordered: bool = BORDERED,
+                 relax_dissipation: bool = RELAX_DISSIPATION):
         if solver.alpha is None:
             raise ValueError("CoupledNewton needs a scene with fracture regions (no phase field to couple)")
         if solver._tractions:
@@ -73,6 +75,10 @@ class CoupledNewton:
         if not isinstance(bordered, bool):
             raise ValueError(f"coupled bordered = {bordered!r} must be True or False")
         self.bordered = bordered
+        if not isinstance(relax_dissipation, bool):
+            raise ValueError(f"coupled relax_dissipation = {relax_dissipation!r} must be True or False")
+        #: solves under dissipation control relax the displacement too (RELAX_DISSIPATION)
+        self.relax_dissipation = relax_dissipation
         #: keep block-GMRES's u-u factor while it pays (:data:`ngtmc.coupled.settings.FACTOR_REUSE`)
         self.factor_reuse = solver.mesh.dim == 3 if factor_reuse == "auto" else factor_reuse
         #: solves accepted at the residual floor (the solver's ``floor_rtol``, shared with the

@@ -3,7 +3,7 @@ each with the measurement it rests on."""
 import os
 
 __all__ = ["DEBUG", "STALL_WINDOW", "STALL_FACTOR", "LEVENBERG_SHIFTS", "WEAK_STEP", "WEAK_STOP", "COUPLED_RTOL", "FACTOR_REUSE",
-           "BORDERED"]
+           "BORDERED", "RELAX_DISSIPATION"]
 
 #: print the merits and steps of each iteration (environment variable NGTMC_DEBUG_COUPLED set)
 DEBUG = bool(os.environ.get("NGTMC_DEBUG_COUPLED"))
@@ -65,3 +65,16 @@ FACTOR_REUSE = "auto"
 #: change together) in one GMRES run instead of two (:mod:`ngtmc.coupled.bordered`);
 #: ``coupled={"bordered": False}`` makes the two solves (docs/performance.md).
 BORDERED = True
+
+#: Default of ``coupled={"relax_dissipation": ...}``: whether a solve under dissipation control
+#: (path following's dissipation steps) relaxes the displacement at fixed alpha where it stalls,
+#: as a solve at a fixed load does (:meth:`ngtmc.coupled.iteration.Iteration.relax_u`). The
+#: relaxation leaves an unstable equilibrium of a squeezed void at contact onset, a displacement
+#: step; in a dissipation step that stalls it mostly adds its iterations to an attempt that then
+#: fails and is cut back. Measured without it, side by side on one machine (docs/performance.md):
+#: the paper three-point bending 185 steps and 871 Newton iterations, the most in a step 18,
+#: against 178/952 and 183/964 (three steps above 20) for two runs with it; the quick one 82 steps
+#: and 389 against 398; the quick L-panel with path following, case main 614 against 671, but
+#: case monotonic 818 against 686 (34 against 14 cut-backs). So it stays on by default and the
+#: three-point-bending study switches it off.
+RELAX_DISSIPATION = True

@@ -122,8 +122,8 @@ class Simulation(RunRecords, RunState, RunRefinement, StepSchemes):
     max_staggered : int
         Pass limit for "staggered" (the step counts as failed beyond it).
     coupled : dict, optional
-        Options of the "monolithic" scheme: ``alpha_tol``, ``max_iterations``, ``linear_solver``
-        of :class:`ngtmc.coupled.monolithic.CoupledNewton`; ``fallback`` ("single-pass", "capped" or
+        Options of the "monolithic" scheme: ``alpha_tol``, ``max_iterations``, ``linear_solver``,
+        ``relax_dissipation`` of :class:`ngtmc.coupled.monolithic.CoupledNewton`; ``fallback`` ("single-pass", "capped" or
         "staggered", where the coupled Newton fails at a fixed load: the monolithic scheme's steps
         and path following's displacement steps taken instead of a dissipation step; see
         ``StepSchemes._attempt_monolithic``); ``damage_cap`` (default 0.25) and

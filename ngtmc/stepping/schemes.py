@@ -101,7 +101,7 @@ def alpha_u_passes(s, load: float, max_passes: int = 1, info: dict | None = None
 
 #: The keys of ``Simulation(coupled=...)`` that reach :class:`ngtmc.coupled.monolithic.CoupledNewton`.
 _COUPLED_KEYS = ("alpha_tol", "max_iterations", "linear_solver", "gmres_rtol", "gmres_maxsteps", "weak_stop",
-                 "factor_reuse", "bordered")
+                 "factor_reuse", "bordered", "relax_dissipation")
 
 
 class StepSchemes:
