@@ -73,8 +73,9 @@ BORDERED = True
 #: step; in a dissipation step that stalls it mostly adds its iterations to an attempt that then
 #: fails and is cut back. Measured without it, side by side on one machine (docs/performance.md):
 #: the paper three-point bending 185 steps and 871 Newton iterations, the most in a step 18,
-#: against 178/952 and 183/964 (three steps above 20) for two runs with it; the quick one 82 steps
+#: against 178/952 and 183/964 for two runs with it (an earlier run: three steps above 20); the quick one 82 steps
 #: and 389 against 398; the quick L-panel with path following, case main 614 against 671, but
 #: case monotonic 818 against 686 (34 against 14 cut-backs). So it stays on by default and the
-#: three-point-bending study switches it off.
+#: three-point-bending studies switch it off (the 2D study, and the 3D study's hemisphere: 291 against
+#: 376 iterations at quick).
 RELAX_DISSIPATION = True
