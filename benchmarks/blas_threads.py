@@ -18,14 +18,14 @@ own thread counts). Record: ``<study>-<resolution>-<UTC time>-blas-threads.json`
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 import shlex
 import sys
 import tempfile
 
 from .run import machine_info
-from .study_process import RESULTS, cell, git_state, git_text, run_study, stamp, summary_of, write_record
+from .study_process import (RESULTS, cell, git_state, git_text, run_study, stamp, summary_of, time_split_of,
+                            write_record)
 from .study_settings import parse_variant as labelled_settings
 
 DEFAULT_VARIANTS = ["package default:", "keep: NGTMC_BLAS_THREADS=keep"]
@@ -83,10 +83,7 @@ def main(argv=None) -> int:
             entry = {"label": label, "limits": limits, "env": env, "threads": threads,
                      **run_study(args.study, args.resolution, folder, threads, args.set, env,
                                  launcher=(sys.executable, "-c", LAUNCH.format(limits=limits)))}
-            entry.update(summary_of(folder))
-            if (folder / "metadata.json").exists():
-                meta = json.loads((folder / "metadata.json").read_text())
-                entry["time_split_s"] = next(iter(meta.get("results", {}).values()), {}).get("time_split_s")
+            entry.update(summary_of(folder), time_split_s=time_split_of(folder))
             failed |= entry["returncode"] != 0
             runs.append(entry)
             print(f"[blas] {label}: " + ", ".join(f"{k} {entry.get(k)}" for k in

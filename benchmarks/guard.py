@@ -14,7 +14,6 @@ Record: ``guard-<study>-<resolution>-<UTC time>.json`` / ``.md`` in ``--out`` (d
 from __future__ import annotations
 
 import argparse
-import json
 import os
 from pathlib import Path
 import shlex
@@ -25,7 +24,8 @@ import time
 import numpy as np
 
 from .run import machine_info
-from .study_process import RESULTS, cell, git_state, git_text, run_study, stamp, summary_of, write_record
+from .study_process import (RESULTS, cell, git_state, git_text, run_study, stamp, summary_of, time_split_of,
+                            write_record)
 
 WAYS = {"matrix": {}, "interpolate": {"NGTMC_J_GUARD": "interpolate"}}
 
@@ -127,10 +127,7 @@ def main(argv=None) -> int:
                 folder = Path(tmp) / way
                 entry = {"way": way, "env": env, **run_study(args.study, args.resolution, folder, args.threads,
                                                              args.set, env)}
-                entry.update(summary_of(folder))
-                if (folder / "metadata.json").exists():
-                    meta = json.loads((folder / "metadata.json").read_text())
-                    entry["time_split_s"] = next(iter(meta.get("results", {}).values()), {}).get("time_split_s")
+                entry.update(summary_of(folder), time_split_s=time_split_of(folder))
                 failed |= entry["returncode"] != 0
                 runs.append(entry)
                 print(f"[guard] {way}: " + ", ".join(f"{k} {entry.get(k)}" for k in

@@ -17,7 +17,8 @@ from .compare_histories import summary
 from .harness import _fmt as cell
 from .run import _git
 
-__all__ = ["NGTMC", "RESULTS", "cell", "git_state", "git_text", "run_study", "stamp", "summary_of", "write_record"]
+__all__ = ["NGTMC", "RESULTS", "cell", "git_state", "git_text", "run_study", "stamp", "summary_of", "time_split_of",
+           "write_record"]
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -58,6 +59,15 @@ def summary_of(folder: Path) -> dict:
     s = summary(folder)
     s.pop("run", None)
     return s
+
+
+def time_split_of(folder: Path) -> dict | None:
+    """The first case's time split (s by part: assembly, solve, line search, ...) from a run
+    folder's ``metadata.json``; None where the run left none."""
+    meta = Path(folder) / "metadata.json"
+    if not meta.exists():
+        return None
+    return next(iter(json.loads(meta.read_text()).get("results", {}).values()), {}).get("time_split_s")
 
 
 def git_state() -> dict:

@@ -353,15 +353,14 @@ def test_coupled_tangent_is_the_derivative_of_the_residual_in_3d_with_a_squeezed
     assert err_u < 1e-7 and err_a < 1e-7
 
 
-def test_a_failed_solve_counts_the_iterations_of_its_displacement_relaxation(monkeypatch):
-    """Where the line search fails the coupled Newton relaxes u at fixed alpha (a displacement
-    Newton); the iterations it takes count in the solve's result whether the solve then converges
-    or fails, so that a run's Newton iterations (the history, the benchmark records) hold all
-    the work done."""
+def _line_search_failing(monkeypatch, **options):
+    """A CoupledNewton (``options``) on the notched plate, solved at 1e-3 mm and then put off
+    equilibrium, whose line search always fails and whose displacement relaxation fails after 7
+    iterations; returns it and the list of the loads the relaxation was called at."""
     from ngtmc.coupled.iteration import Iteration
     from ngtmc.discrete import NewtonResult
     s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))
-    c = CoupledNewton(s)
+    c = CoupledNewton(s, **options)
     assert c.solve(1e-3).converged     # the boundary values in place: the next solve starts from them
     s.alpha.vec.FV().NumPy()[:] += 0.01   # off equilibrium, the boundary values kept
     monkeypatch.setattr(Iteration, "search", lambda self, dxN, dlam, merit0, scale_u, lam0: (False, lam0, 0.0, math.inf))
@@ -372,39 +371,38 @@ def test_a_failed_solve_counts_the_iterations_of_its_displacement_relaxation(mon
         return NewtonResult(False, 7, 1.0, 0.0, 0.0, message="relaxation failed")
 
     monkeypatch.setattr(s, "solve_displacement", relaxation)
+    return c, calls
+
+
+def test_a_failed_solve_counts_the_iterations_of_its_displacement_relaxation(monkeypatch):
+    """Where the line search fails the coupled Newton relaxes u at fixed alpha (a displacement
+    Newton); the iterations it takes count in the solve's result whether the solve then converges
+    or fails, so that a run's Newton iterations (the history, the benchmark records) hold all
+    the work done."""
+    c, calls = _line_search_failing(monkeypatch)
     r = c.solve(1e-3)
     assert calls == [1e-3] and c.relaxations == 1
     assert not r.converged
     assert r.iterations == 1 + 7   # the coupled iteration whose line search failed, and the relaxation's
 
 
-@pytest.mark.parametrize("relax_dissipation", [False, True])
+@pytest.mark.parametrize("relax_dissipation", [None, False, True])
 def test_a_dissipation_solve_relaxes_the_displacement_only_when_asked(monkeypatch, relax_dissipation):
-    """``relax_dissipation`` (default True, RELAX_DISSIPATION): with it off a solve under
-    dissipation control whose line search fails goes on to the residual floor or fails without
-    the displacement relaxation; with it on it relaxes, as a solve at a fixed load always does.
-    A value that is not a bool is an error."""
-    from ngtmc.coupled.iteration import Iteration
+    """``relax_dissipation`` (default True, RELAX_DISSIPATION; None here: not given): with it off a
+    solve under dissipation control whose line search fails goes on to the residual floor or fails
+    without the displacement relaxation; with it on it relaxes, as a solve at a fixed load always
+    does. A value that is not a bool is an error."""
     from ngtmc.coupled.settings import RELAX_DISSIPATION
-    from ngtmc.discrete import NewtonResult
-    assert RELAX_DISSIPATION is True and CoupledNewton(ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))).relax_dissipation
-    s = ngtmc.Solver(notched_plate(maxh=0.2, h_band=0.05, l0=0.1))
-    c = CoupledNewton(s, relax_dissipation=relax_dissipation)
-    assert c.solve(1e-3).converged
-    s.alpha.vec.FV().NumPy()[:] += 0.01
-    monkeypatch.setattr(Iteration, "search", lambda self, dxN, dlam, merit0, scale_u, lam0: (False, lam0, 0.0, math.inf))
-    calls = []
-
-    def relaxation(load):
-        calls.append(load)
-        return NewtonResult(False, 7, 1.0, 0.0, 0.0, message="relaxation failed")
-
-    monkeypatch.setattr(s, "solve_displacement", relaxation)
+    assert RELAX_DISSIPATION is True
+    options = {} if relax_dissipation is None else {"relax_dissipation": relax_dissipation}
+    c, calls = _line_search_failing(monkeypatch, **options)
+    relaxes = relax_dissipation is not False
+    assert c.relax_dissipation is relaxes
     r = c.solve(1e-3, dissipation=1e-6)
     assert not r.converged
-    assert calls == ([1e-3] if relax_dissipation else []) and c.relaxations == int(relax_dissipation)
-    assert r.iterations == 1 + 7 * relax_dissipation
+    assert calls == ([1e-3] if relaxes else []) and c.relaxations == int(relaxes)
+    assert r.iterations == 1 + 7 * relaxes
     c.solve(1e-3)   # at a fixed load it relaxes either way
-    assert len(calls) == 1 + relax_dissipation
+    assert len(calls) == 1 + relaxes
     with pytest.raises(ValueError, match="relax_dissipation"):
-        CoupledNewton(s, relax_dissipation="no")
+        CoupledNewton(c.s, relax_dissipation="no")
